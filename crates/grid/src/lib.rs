@@ -1,0 +1,54 @@
+//! Occupancy grids, scalar fields and the conventions every envfield crate shares.
+//!
+//! This is the core of envfield ("Learning Continuous Environment Fields via Implicit
+//! Functions", ICLR 2022): the types the solvers, datasets, networks and planners exchange. It
+//! pulls in nothing heavy (no tensor or geometry library).
+//!
+//! - [`Grid2`] / [`Grid3`]: occupancy grids indexed by [`Cell2`] `(row, col)` and
+//!   [`Cell3`] `(x, y, z)`.
+//! - [`Field2`] / [`Field3`]: f32 scalar fields with bilinear / trilinear sampling at
+//!   [`Point2`] / [`Point3`]; `f32::INFINITY` marks unreachable cells.
+//! - [`MoveRule`] (`strict`, `vin`) and [`Neighbourhood2`] / [`Neighbourhood3`]: who steps where.
+//! - The maze text format ([`parse_mazes`], [`read_mazes`], [`write_mazes`]), PNG input and
+//!   heat-map output ([`HeatMapStyle`]), `.npy` input/output ([`NpyArray`]).
+//! - [`FieldModel`]: "the reaching-distance field of this grid for this goal", implemented by
+//!   the exact solvers and by every learned model.
+//!
+//! ```
+//! use envfield_grid::{parse_mazes, Cell2, MoveRule, Neighbourhood2};
+//!
+//! let mazes = parse_mazes("#####\n#S..#\n#.#G#\n#####\n")?;
+//! let maze = &mazes[0];
+//! assert_eq!(maze.goal, Some(Cell2::new(2, 3)));
+//! let steps: Vec<_> = maze
+//!     .grid
+//!     .neighbours(Cell2::new(1, 2), Neighbourhood2::Eight(MoveRule::Strict))
+//!     .map(|(cell, _len)| cell)
+//!     .collect();
+//! // Both diagonals below pass the wall at (2, 2), so under `strict` only the two orthogonal
+//! // steps remain.
+//! assert_eq!(steps, vec![Cell2::new(1, 1), Cell2::new(1, 3)]);
+//! # Ok::<(), envfield_grid::GridError>(())
+//! ```
+
+mod cell;
+mod error;
+mod field;
+mod grid;
+mod io;
+mod maze;
+mod model;
+mod moves;
+mod npy;
+mod png;
+
+pub use cell::{Cell2, Cell3, Point2, Point3};
+pub use error::{GridError, Result};
+pub use field::{Field2, Field3};
+pub use grid::{Grid2, Grid3};
+pub use io::write_atomic;
+pub use maze::{format_mazes, parse_mazes, read_mazes, write_mazes, Maze};
+pub use model::{ContinuousField2, FieldModel};
+pub use moves::{MoveRule, Neighbourhood2, Neighbourhood3, DIRECTIONS_8};
+pub use npy::{NpyArray, NpyData};
+pub use png::{HeatMapStyle, OBSTACLE_COLOR, UNREACHABLE_COLOR};

@@ -1,0 +1,19 @@
+//! envfield: learned continuous environment fields for navigation.
+//!
+//! One name for the whole workspace. Each crate is re-exported under a short module name:
+//!
+//! - [`grid`]: grids, fields, move rules, the maze text format, PNG/.npy I/O, `FieldModel`.
+//! - [`eikonal`]: fast marching (2D/3D, first/second order) and exact graph distances.
+//!
+//! ```
+//! use envfield::eikonal::FastMarching;
+//! use envfield::grid::{Cell2, Grid2};
+//!
+//! let grid = Grid2::new(9, 9)?;
+//! let field = FastMarching::default().solve2(&grid, &[Cell2::new(4, 4)])?;
+//! assert_eq!(field.get(Cell2::new(4, 7)), Some(3.0));
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+pub use envfield_eikonal as eikonal;
+pub use envfield_grid as grid;
