@@ -3,7 +3,7 @@
 //! Cells live in a padded array (two blocked cells on every side), so the first- and
 //! second-order stencils never need bounds checks.
 
-use crate::heap::IndexedHeap;
+use crate::heap::{unpack, IndexedHeap};
 
 const FAR: u8 = 0;
 const TRIAL: u8 = 1;
@@ -83,7 +83,10 @@ impl<const N: usize> Lattice<N> {
 
 struct Marcher<const N: usize> {
     strides: [usize; N],
-    val: Vec<f64>,
+    /// Value of each accepted cell; infinity for every other cell, so the stencil reads one
+    /// array without looking at the state. f32 keeps the working set small (the stencil is
+    /// memory-bound on large grids); arithmetic is in f64. Tentative values live in the heap.
+    known: Vec<f32>,
     state: Vec<u8>,
     /// Travel time across one cell (spacing / speed) per padded cell, when speeds vary.
     tau: Option<Vec<f64>>,
@@ -101,78 +104,98 @@ impl<const N: usize> Marcher<N> {
         }
     }
 
-    /// Solves `sum_j c_j (u - v_j)^2 = tau^2` over the upwind terms sorted by `v`, adding terms
-    /// while the solution exceeds the next `v`. Returns the solution, how many terms it used,
-    /// and whether every quadratic had a real root.
+    /// Solves `sum_k c_k (u - v_k)^2 = tau^2` over the upwind terms `(v, c, a1)` (an axis
+    /// contributes `c (u - v)^2`; `a1` is its accepted neighbour, infinity where it has none),
+    /// adding axes in increasing `v` while the solution exceeds the next `v`. The arithmetic is
+    /// shifted by the smallest `v` so the quadratic stays well conditioned, and written with
+    /// selects rather than branches: which case applies is data-dependent and unpredictable.
+    ///
+    /// Returns `None` when a quadratic has no real root or the result falls below an accepted
+    /// neighbour it was built from (only possible with second-order terms).
     #[inline]
-    fn solve(terms: &mut [(f64, f64, f64)], tau: f64) -> (f64, usize, bool) {
-        // Insertion sort by v: at most 3 terms.
-        for i in 1..terms.len() {
-            let mut j = i;
-            while j > 0 && terms[j - 1].0 > terms[j].0 {
-                terms.swap(j - 1, j);
-                j -= 1;
+    fn solve(terms: [(f64, f64, f64); N], tau: f64) -> Option<f64> {
+        let mut t = terms;
+        // Sorting network on v with selects.
+        let mut cswap = |i: usize, j: usize| {
+            let (x, y) = (t[i], t[j]);
+            let swap = x.0 > y.0;
+            t[i] = if swap { y } else { x };
+            t[j] = if swap { x } else { y };
+        };
+        match N {
+            2 => cswap(0, 1),
+            3 => {
+                cswap(0, 1);
+                cswap(1, 2);
+                cswap(0, 1);
+            }
+            _ => {
+                for i in 1..N {
+                    for j in (1..=i).rev() {
+                        cswap(j - 1, j);
+                    }
+                }
             }
         }
-        let (v0, c0, _) = terms[0];
+        let (v0, c0, a0) = t[0];
         let mut u = v0 + tau / c0.sqrt();
+        let mut ok = true;
+        let mut max_a1 = a0;
         let (mut sa, mut sb, mut sc) = (c0, 0.0, 0.0);
-        let mut used = 1;
-        for &(v, c, _) in &terms[1..] {
-            if u <= v {
-                break;
-            }
+        for &(v, c, a1) in &t[1..] {
+            let take = u > v;
             let d = v - v0;
-            sa += c;
-            sb += c * d;
-            sc += c * d * d;
-            let disc = sb * sb - sa * (sc - tau * tau);
-            if disc < 0.0 {
-                return (u, used, false);
-            }
-            u = v0 + (sb + disc.sqrt()) / sa;
-            used += 1;
+            let (na, nb, nc) = (sa + c, sb + c * d, sc + c * d * d);
+            let disc = nb * nb - na * (nc - tau * tau);
+            let cand = v0 + (nb + disc.max(0.0).sqrt()) / na;
+            ok &= !take || disc >= 0.0;
+            u = if take { cand } else { u };
+            max_a1 = if take { max_a1.max(a1) } else { max_a1 };
+            sa = if take { na } else { sa };
+            sb = if take { nb } else { sb };
+            sc = if take { nc } else { sc };
         }
-        (u, used, true)
+        (ok && u >= max_a1).then_some(u)
     }
 
     /// The tentative value of cell `q` from its accepted neighbours.
     #[inline]
     fn estimate(&self, q: usize) -> f64 {
         let tau = self.tau(q);
-        let mut first = [(0.0, 1.0, 0.0); N];
-        let mut second = [(0.0, 1.0, 0.0); N];
-        let mut n = 0;
-        let mut min_a1 = f64::INFINITY;
+        let known = &self.known[..];
+        let mut a = [f64::INFINITY; N];
+        let mut far = [0usize; N];
         for k in 0..N {
             let s = self.strides[k];
-            let (lo, hi) = (q - s, q + s);
-            let a_lo = if self.state[lo] == KNOWN { self.val[lo] } else { f64::INFINITY };
-            let a_hi = if self.state[hi] == KNOWN { self.val[hi] } else { f64::INFINITY };
-            let (a1, n2) = if a_lo <= a_hi { (a_lo, lo - s) } else { (a_hi, hi + s) };
-            if a1 == f64::INFINITY {
-                continue;
-            }
-            min_a1 = min_a1.min(a1);
-            first[n] = (a1, 1.0, a1);
-            second[n] = if self.second_order && self.state[n2] == KNOWN && self.val[n2] <= a1 {
-                ((4.0 * a1 - self.val[n2]) / 3.0, 2.25, a1)
-            } else {
-                (a1, 1.0, a1)
+            // SAFETY: `q` is a real cell, so `q ± 2s` lies inside the two-cell padding.
+            let (a_lo, a_hi) = unsafe {
+                (
+                    *known.get_unchecked(q - s) as f64,
+                    *known.get_unchecked(q + s) as f64,
+                )
             };
-            n += 1;
+            let lo = a_lo <= a_hi;
+            a[k] = if lo { a_lo } else { a_hi };
+            far[k] = if lo { q - 2 * s } else { q + 2 * s };
         }
-        debug_assert!(n > 0, "estimate called without an accepted neighbour");
+        let min_a1 = a.iter().fold(f64::INFINITY, |m, &x| m.min(x));
+        debug_assert!(min_a1.is_finite(), "estimate called without an accepted neighbour");
+        let first = a.map(|x| (x, 1.0, x));
         if self.second_order {
-            let terms = &mut second[..n];
-            let (u, used, ok) = Self::solve(terms, tau);
-            // Upwind check: the value must not fall below a neighbour it was built from.
-            if ok && terms[..used].iter().all(|t| t.2 <= u) {
+            let mut terms = first;
+            for k in 0..N {
+                // SAFETY: as above.
+                let a2 = unsafe { *known.get_unchecked(far[k]) as f64 };
+                if a[k].is_finite() && a2 <= a[k] {
+                    terms[k] = ((4.0 * a[k] - a2) / 3.0, 2.25, a[k]);
+                }
+            }
+            if let Some(u) = Self::solve(terms, tau) {
                 return u.min(min_a1 + tau);
             }
         }
-        let (u, _, _) = Self::solve(&mut first[..n], tau);
-        u.min(min_a1 + tau)
+        // First order always has a real root once sorted (u > v implies a real crossing).
+        Self::solve(first, tau).unwrap_or(min_a1 + tau).min(min_a1 + tau)
     }
 
     #[inline]
@@ -180,12 +203,12 @@ impl<const N: usize> Marcher<N> {
         for k in 0..N {
             let s = self.strides[k];
             for q in [i - s, i + s] {
-                let st = self.state[q];
+                // SAFETY: neighbours of a real cell lie inside the padding.
+                let st = unsafe { *self.state.get_unchecked(q) };
                 if st == FAR || st == TRIAL {
-                    let u = self.estimate(q);
-                    self.val[q] = u;
+                    let u = self.estimate(q) as f32;
                     self.state[q] = TRIAL;
-                    self.heap.set(q as u32, u);
+                    self.heap.set(u, q as u32);
                 }
             }
         }
@@ -208,7 +231,7 @@ pub(crate) fn march<const N: usize>(p: &Problem<'_, N>) -> Vec<f32> {
     });
     let mut m = Marcher::<N> {
         strides: lat.strides,
-        val: vec![f64::INFINITY; lat.len],
+        known: vec![f32::INFINITY; lat.len],
         state,
         tau,
         tau_uniform: p.spacing,
@@ -239,9 +262,9 @@ pub(crate) fn march<const N: usize>(p: &Problem<'_, N>) -> Vec<f32> {
             if inside && line_of_sight(&m.state, &lat, *src, off) {
                 let ci = lat.padded(cell);
                 let len = off.iter().map(|&o| (o * o) as f64).sum::<f64>().sqrt();
-                let t = len * 0.5 * (m.tau(si) + m.tau(ci));
-                if t < m.val[ci] {
-                    m.val[ci] = t;
+                let t = (len * 0.5 * (m.tau(si) + m.tau(ci))) as f32;
+                if t < m.known[ci] {
+                    m.known[ci] = t;
                 }
                 frozen.push(ci);
             }
@@ -256,9 +279,11 @@ pub(crate) fn march<const N: usize>(p: &Problem<'_, N>) -> Vec<f32> {
         for &i in &frozen {
             m.update_neighbours(i);
         }
-        while let Some(i) = m.heap.pop() {
+        while let Some(entry) = m.heap.pop() {
+            let (value, i) = unpack(entry);
             let i = i as usize;
             m.state[i] = KNOWN;
+            m.known[i] = value;
             if Some(i) == stop {
                 break;
             }
@@ -268,9 +293,7 @@ pub(crate) fn march<const N: usize>(p: &Problem<'_, N>) -> Vec<f32> {
 
     let mut out = vec![f32::INFINITY; p.obstacles.len()];
     lat.for_each(|o, i| {
-        if m.state[i] == KNOWN {
-            out[o] = m.val[i] as f32;
-        }
+        out[o] = m.known[i];
     });
     out
 }
@@ -308,3 +331,4 @@ fn line_of_sight<const N: usize>(
         }
     }
 }
+

@@ -41,6 +41,7 @@ mod model;
 mod moves;
 mod npy;
 mod png;
+pub mod synth;
 
 pub use cell::{Cell2, Cell3, Point2, Point3};
 pub use error::{GridError, Result};
