@@ -15,7 +15,9 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 #[derive(Parser)]
-#[command(about = "Fast marching on a grid (.txt maze, .png or .npy); prints the median solve time as JSON")]
+#[command(
+    about = "Fast marching on a grid (.txt maze, .png or .npy); prints the median solve time as JSON"
+)]
 struct Args {
     /// The grid: a maze text file, a PNG (dark = obstacle) or a 2D/3D bool/uint8 .npy array.
     grid: PathBuf,
@@ -58,13 +60,20 @@ fn load(path: &Path) -> Result<Input> {
             3 => Input::Three(Grid3::read_npy(path)?),
             n => bail!("{}: expected a 2D or 3D array, found {n}D", path.display()),
         },
-        _ => bail!("{}: unknown grid format (expected .txt, .png or .npy)", path.display()),
+        _ => bail!(
+            "{}: unknown grid format (expected .txt, .png or .npy)",
+            path.display()
+        ),
     })
 }
 
 fn parse_cell(s: &str) -> Result<Vec<usize>> {
     s.split(',')
-        .map(|p| p.trim().parse::<usize>().with_context(|| format!("bad coordinate {p:?} in --goal {s:?}")))
+        .map(|p| {
+            p.trim()
+                .parse::<usize>()
+                .with_context(|| format!("bad coordinate {p:?} in --goal {s:?}"))
+        })
         .collect()
 }
 
@@ -89,7 +98,10 @@ fn main() -> Result<()> {
         Input::Two(grid, maze_goal) => {
             let goal = match goal.as_deref() {
                 Some([r, c]) => Cell2::new(*r, *c),
-                Some(other) => bail!("--goal needs R,C for a 2D grid, got {} numbers", other.len()),
+                Some(other) => bail!(
+                    "--goal needs R,C for a 2D grid, got {} numbers",
+                    other.len()
+                ),
                 None => maze_goal.unwrap_or(Cell2::new(grid.rows() / 2, grid.cols() / 2)),
             };
             let mut field = None;
@@ -103,7 +115,12 @@ fn main() -> Result<()> {
             match &args.out {
                 Some(p) if p.extension().is_some_and(|e| e == "png") => {
                     let scale = (512 / grid.rows().max(grid.cols())).clamp(1, 16) as u32;
-                    let style = HeatMapStyle { scale, grid: Some(&grid), goal: Some(goal), ..Default::default() };
+                    let style = HeatMapStyle {
+                        scale,
+                        grid: Some(&grid),
+                        goal: Some(goal),
+                        ..Default::default()
+                    };
                     field.write_png(p, &style)?;
                 }
                 Some(p) => field.write_npy(p)?,
@@ -120,7 +137,10 @@ fn main() -> Result<()> {
             let [nx, ny, nz] = grid.shape();
             let goal = match goal.as_deref() {
                 Some([x, y, z]) => Cell3::new(*x, *y, *z),
-                Some(other) => bail!("--goal needs X,Y,Z for a 3D grid, got {} numbers", other.len()),
+                Some(other) => bail!(
+                    "--goal needs X,Y,Z for a 3D grid, got {} numbers",
+                    other.len()
+                ),
                 None => Cell3::new(nx / 2, ny / 2, nz / 2),
             };
             let mut field = None;

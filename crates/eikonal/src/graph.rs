@@ -1,7 +1,9 @@
 //! Exact shortest-path distances on the move graph of a grid.
 
 use crate::{EikonalError, Result};
-use envfield_grid::{Cell2, Cell3, Field2, Field3, FieldModel, Grid2, Grid3, Neighbourhood2, Neighbourhood3};
+use envfield_grid::{
+    Cell2, Cell3, Field2, Field3, FieldModel, Grid2, Grid3, Neighbourhood2, Neighbourhood3,
+};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::cmp::Ordering;
@@ -52,7 +54,11 @@ fn check_sources<C: Copy + std::fmt::Display>(
 }
 
 /// Dijkstra over cells: `neighbours(i, push)` calls `push(j, step_cost)` for each move from `i`.
-fn dijkstra(n: usize, sources: &[usize], neighbours: impl Fn(usize, &mut dyn FnMut(usize, f64))) -> Vec<f32> {
+fn dijkstra(
+    n: usize,
+    sources: &[usize],
+    neighbours: impl Fn(usize, &mut dyn FnMut(usize, f64)),
+) -> Vec<f32> {
     let mut dist = vec![f64::INFINITY; n];
     let mut done = vec![false; n];
     let mut heap = BinaryHeap::new();
@@ -93,7 +99,13 @@ fn bfs(n: usize, sources: &[usize], neighbours: impl Fn(usize, &mut dyn FnMut(us
         });
     }
     dist.into_iter()
-        .map(|d| if d == u32::MAX { f32::INFINITY } else { d as f32 })
+        .map(|d| {
+            if d == u32::MAX {
+                f32::INFINITY
+            } else {
+                d as f32
+            }
+        })
         .collect()
 }
 
@@ -105,7 +117,12 @@ fn bfs(n: usize, sources: &[usize], neighbours: impl Fn(usize, &mut dyn FnMut(us
 /// [`EikonalError::NoSources`], [`EikonalError::SourceOutside`],
 /// [`EikonalError::SourceOnObstacle`], [`EikonalError::NoFreeCell`], and
 /// [`EikonalError::InvalidConfig`] for a diagonal cost that is not finite and positive.
-pub fn dijkstra2(grid: &Grid2, sources: &[Cell2], nb: Neighbourhood2, diagonal_cost: f32) -> Result<Field2> {
+pub fn dijkstra2(
+    grid: &Grid2,
+    sources: &[Cell2],
+    nb: Neighbourhood2,
+    diagonal_cost: f32,
+) -> Result<Field2> {
     if !(diagonal_cost.is_finite() && diagonal_cost > 0.0) {
         return Err(EikonalError::InvalidConfig(format!(
             "diagonal cost must be finite and positive, got {diagonal_cost}"
@@ -145,7 +162,12 @@ pub fn bfs2(grid: &Grid2, sources: &[Cell2], nb: Neighbourhood2) -> Result<Field
 /// As [`dijkstra2`].
 pub fn dijkstra3(grid: &Grid3, sources: &[Cell3], nb: Neighbourhood3) -> Result<Field3> {
     let [a, b, c] = grid.shape();
-    let src = check_sources(sources, |c| grid.index(c), grid.obstacles(), &format!("{a}x{b}x{c}"))?;
+    let src = check_sources(
+        sources,
+        |c| grid.index(c),
+        grid.obstacles(),
+        &format!("{a}x{b}x{c}"),
+    )?;
     let values = dijkstra(grid.len(), &src, |i, push| {
         for (c, len) in grid.neighbours(grid.cell(i), nb) {
             push(grid.index(c).expect("neighbour inside"), len as f64);
@@ -160,7 +182,12 @@ pub fn dijkstra3(grid: &Grid3, sources: &[Cell3], nb: Neighbourhood3) -> Result<
 /// As [`dijkstra2`].
 pub fn bfs3(grid: &Grid3, sources: &[Cell3], nb: Neighbourhood3) -> Result<Field3> {
     let [a, b, c] = grid.shape();
-    let src = check_sources(sources, |c| grid.index(c), grid.obstacles(), &format!("{a}x{b}x{c}"))?;
+    let src = check_sources(
+        sources,
+        |c| grid.index(c),
+        grid.obstacles(),
+        &format!("{a}x{b}x{c}"),
+    )?;
     let values = bfs(grid.len(), &src, |i, push| {
         for (c, _) in grid.neighbours(grid.cell(i), nb) {
             push(grid.index(c).expect("neighbour inside"));
@@ -215,6 +242,11 @@ impl FieldModel for GraphDistance {
     }
 
     fn predict(&self, grid: &Grid2, goal: Cell2) -> envfield_grid::Result<Field2> {
-        Ok(dijkstra2(grid, &[goal], self.neighbourhood, std::f32::consts::SQRT_2)?)
+        Ok(dijkstra2(
+            grid,
+            &[goal],
+            self.neighbourhood,
+            std::f32::consts::SQRT_2,
+        )?)
     }
 }

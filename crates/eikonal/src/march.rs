@@ -179,7 +179,10 @@ impl<const N: usize> Marcher<N> {
             far[k] = if lo { q - 2 * s } else { q + 2 * s };
         }
         let min_a1 = a.iter().fold(f64::INFINITY, |m, &x| m.min(x));
-        debug_assert!(min_a1.is_finite(), "estimate called without an accepted neighbour");
+        debug_assert!(
+            min_a1.is_finite(),
+            "estimate called without an accepted neighbour"
+        );
         let first = a.map(|x| (x, 1.0, x));
         if self.second_order {
             let mut terms = first;
@@ -195,7 +198,9 @@ impl<const N: usize> Marcher<N> {
             }
         }
         // First order always has a real root once sorted (u > v implies a real crossing).
-        Self::solve(first, tau).unwrap_or(min_a1 + tau).min(min_a1 + tau)
+        Self::solve(first, tau)
+            .unwrap_or(min_a1 + tau)
+            .min(min_a1 + tau)
     }
 
     #[inline]
@@ -331,4 +336,3 @@ fn line_of_sight<const N: usize>(
         }
     }
 }
-

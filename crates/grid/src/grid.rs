@@ -284,7 +284,10 @@ mod tests {
 
     #[test]
     fn zero_sized_grids_are_rejected() {
-        assert!(matches!(Grid2::new(0, 3), Err(GridError::InvalidShape { .. })));
+        assert!(matches!(
+            Grid2::new(0, 3),
+            Err(GridError::InvalidShape { .. })
+        ));
         assert!(Grid3::new(2, 0, 2).is_err());
         assert!(matches!(
             Grid2::from_obstacles(2, 2, vec![false; 3]),

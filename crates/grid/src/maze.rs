@@ -163,11 +163,7 @@ impl Builder {
     }
 
     fn rows(&self) -> usize {
-        if self.cols == 0 {
-            0
-        } else {
-            self.cells.len() / self.cols
-        }
+        self.cells.len().checked_div(self.cols).unwrap_or(0)
     }
 
     fn push_row(&mut self, line: &str, line_no: usize) -> Result<()> {

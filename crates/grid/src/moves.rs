@@ -182,8 +182,14 @@ mod tests {
         let a = Cell2::new(0, 0);
         assert!(!MoveRule::Strict.allows(&g, a, 1, 1));
         assert!(MoveRule::Vin.allows(&g, a, 1, 1));
-        assert_eq!(g.neighbours(a, Neighbourhood2::Eight(MoveRule::Strict)).count(), 0);
-        let v: Vec<_> = g.neighbours(a, Neighbourhood2::Eight(MoveRule::Vin)).collect();
+        assert_eq!(
+            g.neighbours(a, Neighbourhood2::Eight(MoveRule::Strict))
+                .count(),
+            0
+        );
+        let v: Vec<_> = g
+            .neighbours(a, Neighbourhood2::Eight(MoveRule::Vin))
+            .collect();
         assert_eq!(v, vec![(Cell2::new(1, 1), SQRT_2)]);
     }
 
@@ -192,11 +198,23 @@ mod tests {
         let g = Grid3::new(3, 3, 3).unwrap();
         let c = Cell3::new(1, 1, 1);
         assert_eq!(g.neighbours(c, Neighbourhood3::Six).len(), 6);
-        assert_eq!(g.neighbours(c, Neighbourhood3::TwentySix(MoveRule::Strict)).len(), 26);
+        assert_eq!(
+            g.neighbours(c, Neighbourhood3::TwentySix(MoveRule::Strict))
+                .len(),
+            26
+        );
         let mut g = g;
         g.set_obstacle(Cell3::new(1, 1, 2), true).unwrap();
         // Blocking the cell above removes it and the 8 strict moves that cross it (4 edge + 4 corner).
-        assert_eq!(g.neighbours(c, Neighbourhood3::TwentySix(MoveRule::Strict)).len(), 17);
-        assert_eq!(g.neighbours(c, Neighbourhood3::TwentySix(MoveRule::Vin)).len(), 25);
+        assert_eq!(
+            g.neighbours(c, Neighbourhood3::TwentySix(MoveRule::Strict))
+                .len(),
+            17
+        );
+        assert_eq!(
+            g.neighbours(c, Neighbourhood3::TwentySix(MoveRule::Vin))
+                .len(),
+            25
+        );
     }
 }

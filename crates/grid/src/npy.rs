@@ -93,8 +93,12 @@ impl NpyArray {
         match &self.data {
             NpyData::Bool(v) => out.extend(v.iter().map(|&b| b as u8)),
             NpyData::U8(v) => out.extend_from_slice(v),
-            NpyData::F32(v) => v.iter().for_each(|x| out.extend_from_slice(&x.to_le_bytes())),
-            NpyData::F64(v) => v.iter().for_each(|x| out.extend_from_slice(&x.to_le_bytes())),
+            NpyData::F32(v) => v
+                .iter()
+                .for_each(|x| out.extend_from_slice(&x.to_le_bytes())),
+            NpyData::F64(v) => v
+                .iter()
+                .for_each(|x| out.extend_from_slice(&x.to_le_bytes())),
         }
         Ok(out)
     }
@@ -130,7 +134,10 @@ impl NpyArray {
             ));
         }
         let shape_text = dict_value(header, "shape")?;
-        let shape_text = shape_text.trim().trim_start_matches('(').trim_end_matches(')');
+        let shape_text = shape_text
+            .trim()
+            .trim_start_matches('(')
+            .trim_end_matches(')');
         let shape: Vec<usize> = shape_text
             .split(',')
             .map(str::trim)
@@ -208,7 +215,9 @@ impl NpyArray {
             NpyData::Bool(v) => v,
             NpyData::U8(v) => v.into_iter().map(|b| b != 0).collect(),
             NpyData::F32(_) | NpyData::F64(_) => {
-                return Err(err("a grid must be a bool or uint8 array (nonzero = obstacle)"))
+                return Err(err(
+                    "a grid must be a bool or uint8 array (nonzero = obstacle)",
+                ))
             }
         };
         Ok((self.shape, mask))

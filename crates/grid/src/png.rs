@@ -111,7 +111,9 @@ impl Field2 {
     pub fn heat_map(&self, style: &HeatMapStyle<'_>) -> Result<RgbImage> {
         let s = style.scale;
         if s == 0 {
-            return Err(GridError::Invalid("heat map scale must be at least 1".into()));
+            return Err(GridError::Invalid(
+                "heat map scale must be at least 1".into(),
+            ));
         }
         if let Some(g) = style.grid {
             if (g.rows(), g.cols()) != (self.rows(), self.cols()) {
@@ -140,12 +142,15 @@ impl Field2 {
             Rgb(color)
         });
         let width = (s as f32 / 5.0).max(1.0);
-        draw_path(&mut img, style.reference_path, s, width * 1.6, [255, 255, 255]);
+        draw_path(
+            &mut img,
+            style.reference_path,
+            s,
+            width * 1.6,
+            [255, 255, 255],
+        );
         draw_path(&mut img, style.path, s, width, [230, 30, 30]);
-        for (cell, color) in [
-            (style.start, [40, 220, 60]),
-            (style.goal, [230, 40, 230]),
-        ] {
+        for (cell, color) in [(style.start, [40, 220, 60]), (style.goal, [230, 40, 230])] {
             if let Some(c) = cell {
                 fill_square(&mut img, c, s, color);
             }
@@ -190,7 +195,13 @@ fn draw_path(img: &mut RgbImage, path: &[Cell2], s: u32, width: f32, color: [u8;
         let steps = ((b.0 - a.0).abs().max((b.1 - a.1).abs()).ceil() as usize).max(1);
         for k in 0..=steps {
             let t = k as f32 / steps as f32;
-            put(img, a.0 + (b.0 - a.0) * t, a.1 + (b.1 - a.1) * t, half, color);
+            put(
+                img,
+                a.0 + (b.0 - a.0) * t,
+                a.1 + (b.1 - a.1) * t,
+                half,
+                color,
+            );
         }
     }
 }

@@ -23,7 +23,7 @@ impl SplitMix64 {
 
     /// Uniform in `0..n` (`n > 0`).
     pub fn below(&mut self, n: usize) -> usize {
-        ((self.next_u64() >> 11) as u128 * n as u128 >> 53) as usize
+        (((self.next_u64() >> 11) as u128 * n as u128) >> 53) as usize
     }
 }
 
@@ -84,7 +84,11 @@ pub fn scatter_cubes3(
     let mut filled = 0;
     while filled < target {
         let side = 1 + rng.below(max_side);
-        let o = [rng.below(shape[0]), rng.below(shape[1]), rng.below(shape[2])];
+        let o = [
+            rng.below(shape[0]),
+            rng.below(shape[1]),
+            rng.below(shape[2]),
+        ];
         for x in o[0]..(o[0] + side).min(shape[0]) {
             for y in o[1]..(o[1] + side).min(shape[1]) {
                 for z in o[2]..(o[2] + side).min(shape[2]) {

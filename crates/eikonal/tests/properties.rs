@@ -1,0 +1,169 @@
+//! Property tests on random grids (proptest, seeded through its config and our generator).
+
+use envfield_eikonal::{bfs2, bfs3, dijkstra2, dijkstra3, FastMarching, Order};
+use envfield_grid::synth::{scatter_cubes3, scatter_squares2, SplitMix64};
+use envfield_grid::{Cell2, Cell3, Grid2, MoveRule, Neighbourhood2, Neighbourhood3};
+use proptest::prelude::*;
+use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
+
+fn runner(cases: u32) -> TestRunner {
+    TestRunner::new_with_rng(
+        Config {
+            cases,
+            ..Config::default()
+        },
+        TestRng::from_seed(RngAlgorithm::ChaCha, &[7; 32]),
+    )
+}
+
+/// A random grid with a random free source cell.
+fn grid_and_source() -> impl Strategy<Value = (Grid2, Cell2)> {
+    (
+        4usize..28,
+        4usize..28,
+        0.0f64..0.45,
+        1usize..4,
+        any::<u64>(),
+    )
+        .prop_map(|(r, c, frac, side, seed)| {
+            let mut rng = SplitMix64::new(seed ^ 0xABCD);
+            let src = Cell2::new(rng.below(r), rng.below(c));
+            (
+                scatter_squares2(r, c, frac, side, seed, &[src]).unwrap(),
+                src,
+            )
+        })
+}
+
+fn check_fmm(grid: &Grid2, src: Cell2, order: Order) -> Result<(), TestCaseError> {
+    let f = FastMarching::with_order(order)
+        .solve2(grid, &[src])
+        .unwrap();
+    let graph4 = bfs2(grid, &[src], Neighbourhood2::Four).unwrap();
+    // Second order may dip below the straight line near the source, by less than scikit-fmm's
+    // own bound on an open grid; first order never does.
+    let below_tol = if order == Order::First { 1e-4 } else { 0.33 };
+    let above_tol = if order == Order::First { 1e-4 } else { 0.05 };
+    prop_assert_eq!(f.get(src), Some(0.0));
+    for i in 0..grid.len() {
+        let cell = grid.cell(i);
+        let v = f.values()[i];
+        if grid.obstacles()[i] {
+            prop_assert!(v.is_infinite(), "obstacle {} has value {}", cell, v);
+            continue;
+        }
+        prop_assert!(v >= 0.0);
+        let g = graph4.values()[i];
+        prop_assert_eq!(
+            v.is_finite(),
+            g.is_finite(),
+            "reachability differs at {}",
+            cell
+        );
+        if !v.is_finite() {
+            continue;
+        }
+        let line = cell.center().distance(src.center());
+        prop_assert!(
+            v >= line - below_tol,
+            "{} below the straight line {} at {}",
+            v,
+            line,
+            cell
+        );
+        prop_assert!(
+            v <= g + above_tol,
+            "{} above the 4-connected distance {} at {}",
+            v,
+            g,
+            cell
+        );
+        for (n, _) in grid.neighbours(cell, Neighbourhood2::Four) {
+            let w = f.get(n).unwrap();
+            prop_assert!(
+                (v - w).abs() <= 1.0 + 1e-4,
+                "neighbours {} and {} differ by {}",
+                cell,
+                n,
+                (v - w).abs()
+            );
+        }
+    }
+    Ok(())
+}
+
+#[test]
+fn first_order_fast_marching_properties() {
+    runner(150)
+        .run(&grid_and_source(), |(g, s)| check_fmm(&g, s, Order::First))
+        .unwrap();
+}
+
+#[test]
+fn second_order_fast_marching_properties() {
+    runner(150)
+        .run(&grid_and_source(), |(g, s)| check_fmm(&g, s, Order::Second))
+        .unwrap();
+}
+
+#[test]
+fn dijkstra_agrees_with_bfs_on_unit_costs() {
+    runner(100)
+        .run(&grid_and_source(), |(g, s)| {
+            for nb in [
+                Neighbourhood2::Four,
+                Neighbourhood2::Eight(MoveRule::Strict),
+                Neighbourhood2::Eight(MoveRule::Vin),
+            ] {
+                let d = dijkstra2(&g, &[s], nb, 1.0).unwrap();
+                let b = bfs2(&g, &[s], nb).unwrap();
+                prop_assert_eq!(d, b);
+            }
+            // With sqrt 2 diagonals, the exact distance lies between the octile bound and the
+            // number of steps times sqrt 2.
+            let nb = Neighbourhood2::Eight(MoveRule::Vin);
+            let d = dijkstra2(&g, &[s], nb, std::f32::consts::SQRT_2).unwrap();
+            let b = bfs2(&g, &[s], nb).unwrap();
+            for i in 0..g.len() {
+                let (dv, bv) = (d.values()[i], b.values()[i]);
+                prop_assert_eq!(dv.is_finite(), bv.is_finite());
+                if dv.is_finite() {
+                    prop_assert!(dv >= bv - 1e-4 && dv <= bv * std::f32::consts::SQRT_2 + 1e-4);
+                }
+            }
+            Ok(())
+        })
+        .unwrap();
+}
+
+#[test]
+fn three_d_graph_and_marching_agree_on_reachability() {
+    runner(30)
+        .run(
+            &(4usize..12, 0.0f64..0.35, any::<u64>()),
+            |(n, frac, seed)| {
+                let mut rng = SplitMix64::new(seed);
+                let src = Cell3::new(rng.below(n), rng.below(n), rng.below(n));
+                let g = scatter_cubes3([n, n, n], frac, 2, seed, &[src]).unwrap();
+                let f = FastMarching::with_order(Order::Second)
+                    .solve3(&g, &[src])
+                    .unwrap();
+                let six = bfs3(&g, &[src], Neighbourhood3::Six).unwrap();
+                let six_d = dijkstra3(&g, &[src], Neighbourhood3::Six).unwrap();
+                prop_assert_eq!(&six, &six_d);
+                let d26 =
+                    dijkstra3(&g, &[src], Neighbourhood3::TwentySix(MoveRule::Strict)).unwrap();
+                for i in 0..g.len() {
+                    let (v, b) = (f.values()[i], six.values()[i]);
+                    prop_assert_eq!(v.is_finite(), b.is_finite());
+                    if v.is_finite() {
+                        let line = g.cell(i).center().distance(src.center());
+                        prop_assert!(v >= line - 0.62 && v <= b + 0.05);
+                        prop_assert!(d26.values()[i] <= b + 1e-4);
+                    }
+                }
+                Ok(())
+            },
+        )
+        .unwrap();
+}
