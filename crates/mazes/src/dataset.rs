@@ -1,0 +1,255 @@
+//! Datasets of (maze, goal, target field) samples and the paper's target encoding.
+
+use crate::{MazeError, MazeGenerator, Result};
+use envfield_eikonal::{dijkstra2, FastMarching, Order};
+use envfield_grid::synth::SplitMix64;
+use envfield_grid::{Cell2, Field2, Grid2, MoveRule, Neighbourhood2, NpyArray, NpyData};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// The value of obstacles and unreachable cells in the encoded target.
+pub const BLOCKED_TARGET: f32 = -1.0;
+
+/// The paper's target encoding (appendix A.4): the reciprocal of the reaching distance,
+/// normalised to `[0, 1]` as `1 / (1 + d)` (the goal is 1, far cells approach 0), and
+/// [`BLOCKED_TARGET`] (-1) for obstacles and unreachable cells. Distances are in cells.
+/// [`decode_target`] inverts it. The one function training and inference share.
+pub fn encode_target(distance: f32) -> f32 {
+    if distance.is_finite() && distance >= 0.0 {
+        1.0 / (1.0 + distance)
+    } else {
+        BLOCKED_TARGET
+    }
+}
+
+/// The inverse of [`encode_target`]: a predicted value `t` in `(0, 1]` is the distance
+/// `1/t - 1` (clamped at 0 above 1); `t <= 0` (obstacle or unreachable) is infinite.
+pub fn decode_target(t: f32) -> f32 {
+    if t > 0.0 {
+        (1.0 / t - 1.0).max(0.0)
+    } else {
+        f32::INFINITY
+    }
+}
+
+/// Which exact field supervises the targets.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum TargetKind {
+    /// Fast marching (the paper's choice); sees no diagonal gaps.
+    FastMarching(Order),
+    /// Exact graph distance under a move rule (orthogonal 1, diagonal sqrt 2).
+    Graph(MoveRule),
+}
+
+/// How to build a dataset.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DatasetConfig {
+    /// The maze generator.
+    pub generator: MazeGenerator,
+    /// Number of mazes.
+    pub mazes: usize,
+    /// Goals per maze (the maze's own goal first, then random free cells).
+    pub goals_per_maze: usize,
+    /// Target field.
+    pub target: TargetKind,
+    /// Fraction of free cells (other than the goal) turned into obstacles at random, the
+    /// paper's stand-in for other agents; 0 disables it.
+    pub extra_obstacles: f32,
+    /// Seed of everything random.
+    pub seed: u64,
+}
+
+/// One training sample: a grid, a goal and its encoded target (row-major).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Sample {
+    /// Index of the maze this sample was made from (for splitting by maze).
+    pub maze: usize,
+    /// The occupancy grid (with any extra obstacles).
+    pub grid: Grid2,
+    /// The goal.
+    pub goal: Cell2,
+    /// `encode_target` of the exact field, one value per cell.
+    pub target: Vec<f32>,
+}
+
+/// A set of samples of one grid size.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Dataset {
+    /// The samples.
+    pub samples: Vec<Sample>,
+}
+
+/// The exact field of `grid` for `goal` under `kind`.
+///
+/// # Errors
+/// From the solvers (a goal on an obstacle, ...).
+pub fn target_field(grid: &Grid2, goal: Cell2, kind: TargetKind) -> Result<Field2> {
+    Ok(match kind {
+        TargetKind::FastMarching(order) => FastMarching::with_order(order).solve2(grid, &[goal])?,
+        TargetKind::Graph(rule) => dijkstra2(grid, &[goal], Neighbourhood2::Eight(rule), std::f32::consts::SQRT_2)?,
+    })
+}
+
+impl Dataset {
+    /// Generates the dataset in parallel (rayon). Deterministic for a config.
+    ///
+    /// # Errors
+    /// [`MazeError::InvalidConfig`] for an out-of-range setting; generator errors.
+    pub fn generate(cfg: &DatasetConfig) -> Result<Self> {
+        if cfg.goals_per_maze == 0 || !(0.0..0.9).contains(&cfg.extra_obstacles) {
+            return Err(MazeError::InvalidConfig(format!(
+                "goals_per_maze must be >= 1 and extra_obstacles in [0, 0.9) (got {}, {})",
+                cfg.goals_per_maze, cfg.extra_obstacles
+            )));
+        }
+        let per_maze: Result<Vec<Vec<Sample>>> = (0..cfg.mazes)
+            .into_par_iter()
+            .map(|i| {
+                let maze_seed = cfg.seed.wrapping_mul(1_000_003).wrapping_add(i as u64);
+                let maze = cfg.generator.generate(maze_seed)?;
+                let mut rng = SplitMix64::new(maze_seed ^ 0x5EED);
+                let free: Vec<Cell2> = maze.grid.free_cells().collect();
+                let mut out = Vec::with_capacity(cfg.goals_per_maze);
+                for k in 0..cfg.goals_per_maze {
+                    let goal = match (k, maze.goal) {
+                        (0, Some(g)) => g,
+                        _ => free[rng.below(free.len())],
+                    };
+                    let mut grid = maze.grid.clone();
+                    if cfg.extra_obstacles > 0.0 {
+                        for &c in &free {
+                            if c != goal && (rng.below(1 << 20) as f32) < cfg.extra_obstacles * (1 << 20) as f32 {
+                                grid.set_obstacle(c, true)?;
+                            }
+                        }
+                    }
+                    let field = target_field(&grid, goal, cfg.target)?;
+                    let target = field.values().iter().map(|&d| encode_target(d)).collect();
+                    out.push(Sample { maze: i, grid, goal, target });
+                }
+                Ok(out)
+            })
+            .collect();
+        Ok(Self { samples: per_maze?.into_iter().flatten().collect() })
+    }
+
+    /// Splits by maze: samples of mazes with index `< train_mazes` go to the first set, the
+    /// rest to the second. No maze is in both.
+    pub fn split_by_maze(self, train_mazes: usize) -> (Dataset, Dataset) {
+        let (a, b): (Vec<Sample>, Vec<Sample>) = self.samples.into_iter().partition(|s| s.maze < train_mazes);
+        (Dataset { samples: a }, Dataset { samples: b })
+    }
+
+    /// Saves the dataset as `.npy` files in folder `dir` (created if needed), each written
+    /// atomically: `obstacles.npy` (N, H, W bool), `goals.npy` (N, 2 float64 row, col),
+    /// `mazes.npy` (N float64 maze index), `targets.npy` (N, H, W float32).
+    ///
+    /// # Errors
+    /// [`MazeError::Dataset`] when the samples differ in size or the set is empty; I/O errors.
+    pub fn save(&self, dir: impl AsRef<Path>) -> Result<()> {
+        let dir = dir.as_ref();
+        let bad = |m: &str| MazeError::Dataset { path: dir.display().to_string(), message: m.into() };
+        let first = self.samples.first().ok_or_else(|| bad("no samples to save"))?;
+        let (h, w) = (first.grid.rows(), first.grid.cols());
+        if self.samples.iter().any(|s| (s.grid.rows(), s.grid.cols()) != (h, w)) {
+            return Err(bad("samples have different grid sizes"));
+        }
+        std::fs::create_dir_all(dir).map_err(|e| bad(&e.to_string()))?;
+        let n = self.samples.len();
+        let arr = |shape: Vec<usize>, data| NpyArray { shape, data };
+        arr(vec![n, h, w], NpyData::Bool(self.samples.iter().flat_map(|s| s.grid.obstacles().iter().copied()).collect()))
+            .write(dir.join("obstacles.npy"))?;
+        arr(vec![n, 2], NpyData::F64(self.samples.iter().flat_map(|s| [s.goal.row as f64, s.goal.col as f64]).collect()))
+            .write(dir.join("goals.npy"))?;
+        arr(vec![n], NpyData::F64(self.samples.iter().map(|s| s.maze as f64).collect())).write(dir.join("mazes.npy"))?;
+        arr(vec![n, h, w], NpyData::F32(self.samples.iter().flat_map(|s| s.target.iter().copied()).collect()))
+            .write(dir.join("targets.npy"))?;
+        Ok(())
+    }
+
+    /// Loads a dataset saved by [`Dataset::save`], checking that the files agree.
+    ///
+    /// # Errors
+    /// [`MazeError::Dataset`] naming the inconsistency; I/O and format errors.
+    pub fn load(dir: impl AsRef<Path>) -> Result<Self> {
+        let dir = dir.as_ref();
+        let bad = |m: String| MazeError::Dataset { path: dir.display().to_string(), message: m };
+        let obstacles = NpyArray::read(dir.join("obstacles.npy"))?;
+        let goals = NpyArray::read(dir.join("goals.npy"))?;
+        let mazes = NpyArray::read(dir.join("mazes.npy"))?;
+        let targets = NpyArray::read(dir.join("targets.npy"))?;
+        let [n, h, w] = obstacles.shape[..] else {
+            return Err(bad(format!("obstacles.npy has shape {:?}, expected (N, H, W)", obstacles.shape)));
+        };
+        if goals.shape != [n, 2] || mazes.shape != [n] || targets.shape != [n, h, w] {
+            return Err(bad(format!(
+                "shapes disagree: obstacles {:?}, goals {:?}, mazes {:?}, targets {:?}",
+                obstacles.shape, goals.shape, mazes.shape, targets.shape
+            )));
+        }
+        let (NpyData::Bool(obs), NpyData::F64(goals), NpyData::F64(ids), NpyData::F32(targets)) =
+            (obstacles.data, goals.data, mazes.data, targets.data)
+        else {
+            return Err(bad("unexpected dtypes (bool, float64, float64, float32 expected)".into()));
+        };
+        let cells = h * w;
+        let mut samples = Vec::with_capacity(n);
+        for i in 0..n {
+            let grid = Grid2::from_obstacles(h, w, obs[i * cells..(i + 1) * cells].to_vec())?;
+            let goal = Cell2::new(goals[2 * i] as usize, goals[2 * i + 1] as usize);
+            grid.check_free(goal, "goal").map_err(|e| bad(format!("sample {i}: {e}")))?;
+            samples.push(Sample { maze: ids[i] as usize, grid, goal, target: targets[i * cells..(i + 1) * cells].to_vec() });
+        }
+        Ok(Self { samples })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::GeneratorKind;
+
+    #[test]
+    fn encoding_round_trips() {
+        for d in [0.0f32, 0.5, 1.0, 7.25, 300.0] {
+            let t = encode_target(d);
+            assert!((0.0..=1.0).contains(&t));
+            assert!((decode_target(t) - d).abs() < 1e-3 * d.max(1.0));
+        }
+        assert_eq!(encode_target(f32::INFINITY), BLOCKED_TARGET);
+        assert!(decode_target(BLOCKED_TARGET).is_infinite());
+    }
+
+    #[test]
+    fn save_load_round_trip_and_split() {
+        let cfg = DatasetConfig {
+            generator: MazeGenerator::new(GeneratorKind::Gridworld, 8).unwrap(),
+            mazes: 6,
+            goals_per_maze: 2,
+            target: TargetKind::Graph(MoveRule::Vin),
+            extra_obstacles: 0.05,
+            seed: 3,
+        };
+        let ds = Dataset::generate(&cfg).unwrap();
+        assert_eq!(ds.samples.len(), 12);
+        assert_eq!(ds, Dataset::generate(&cfg).unwrap());
+        for s in &ds.samples {
+            let gi = s.grid.index(s.goal).unwrap();
+            assert_eq!(s.target[gi], 1.0);
+            for (i, &t) in s.target.iter().enumerate() {
+                assert_eq!(s.grid.obstacles()[i], t == BLOCKED_TARGET && s.grid.obstacles()[i]);
+            }
+        }
+        let dir = std::env::temp_dir().join(format!("envfield-ds-{}", std::process::id()));
+        ds.save(&dir).unwrap();
+        let back = Dataset::load(&dir).unwrap();
+        assert_eq!(back, ds);
+        std::fs::remove_file(dir.join("goals.npy")).unwrap();
+        assert!(Dataset::load(&dir).is_err());
+        std::fs::remove_dir_all(&dir).unwrap();
+        let (train, val) = ds.split_by_maze(4);
+        assert!(train.samples.iter().all(|s| s.maze < 4) && val.samples.iter().all(|s| s.maze >= 4));
+        assert_eq!(train.samples.len() + val.samples.len(), 12);
+    }
+}

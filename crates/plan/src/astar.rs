@@ -1,0 +1,85 @@
+use crate::planner::check_query;
+use crate::{PlanOutcome, Planner, Result};
+use envfield_grid::{Cell2, Grid2, MoveRule, Neighbourhood2};
+use std::cmp::Ordering;
+use std::collections::BinaryHeap;
+
+/// A* with the octile heuristic (admissible and consistent for steps of 1 and sqrt 2) under a
+/// move rule. Finds a shortest path; O(n log n) in the cells it expands.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct AStar {
+    /// The move rule.
+    pub rule: MoveRule,
+}
+
+#[derive(PartialEq)]
+struct Node(f32, f32, usize);
+impl Eq for Node {}
+impl PartialOrd for Node {
+    fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
+        Some(self.cmp(o))
+    }
+}
+impl Ord for Node {
+    fn cmp(&self, o: &Self) -> Ordering {
+        // Min-heap on f, ties to the larger g (deeper nodes first).
+        o.0.total_cmp(&self.0).then(self.1.total_cmp(&o.1))
+    }
+}
+
+fn octile(a: Cell2, b: Cell2) -> f32 {
+    let dr = a.row.abs_diff(b.row) as f32;
+    let dc = a.col.abs_diff(b.col) as f32;
+    dr.max(dc) + (std::f32::consts::SQRT_2 - 1.0) * dr.min(dc)
+}
+
+impl Planner for AStar {
+    fn name(&self) -> &str {
+        "astar"
+    }
+
+    fn plan(&self, grid: &Grid2, start: Cell2, goal: Cell2, max_steps: usize) -> Result<PlanOutcome> {
+        check_query(grid, start, goal)?;
+        let n = grid.len();
+        let mut g = vec![f32::INFINITY; n];
+        let mut parent = vec![usize::MAX; n];
+        let mut closed = vec![false; n];
+        let (s, t) = (grid.check(start)?, grid.check(goal)?);
+        g[s] = 0.0;
+        let mut open = BinaryHeap::new();
+        open.push(Node(octile(start, goal), 0.0, s));
+        while let Some(Node(_, gi, i)) = open.pop() {
+            if closed[i] {
+                continue;
+            }
+            closed[i] = true;
+            if i == t {
+                break;
+            }
+            for (c, len) in grid.neighbours(grid.cell(i), Neighbourhood2::Eight(self.rule)) {
+                let j = c.row * grid.cols() + c.col;
+                let ng = gi + len;
+                if ng < g[j] {
+                    g[j] = ng;
+                    parent[j] = i;
+                    open.push(Node(ng + octile(c, goal), ng, j));
+                }
+            }
+        }
+        if !closed[t] {
+            return Ok(PlanOutcome { path: Vec::new(), success: false });
+        }
+        let mut path = vec![goal];
+        let mut i = t;
+        while i != s {
+            i = parent[i];
+            path.push(grid.cell(i));
+        }
+        path.reverse();
+        let success = path.len() <= max_steps + 1;
+        if !success {
+            path.truncate(max_steps + 1);
+        }
+        Ok(PlanOutcome { path, success })
+    }
+}

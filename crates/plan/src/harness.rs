@@ -1,0 +1,158 @@
+//! The maze evaluation harness: DESIGN.md's protocol, exactly.
+
+use crate::{path_length, Planner, Result};
+use envfield_eikonal::{bfs2, dijkstra2};
+use envfield_grid::{Cell2, Grid2, Maze, MoveRule, Neighbourhood2};
+use envfield_mazes::{evaluation_pairs, Pair};
+use serde::{Deserialize, Serialize};
+use std::time::Instant;
+
+/// How to evaluate.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct EvalConfig {
+    /// The move rule of the agent and of the optimal references.
+    pub rule: MoveRule,
+    /// Random pairs per maze for mazes without both `S` and `G`.
+    pub pairs_per_maze: usize,
+    /// Seed of the random pairs.
+    pub seed: u64,
+}
+
+/// The result of one pair.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PairResult {
+    /// Index of the maze.
+    pub maze: usize,
+    /// Start cell.
+    pub start: Cell2,
+    /// Goal cell.
+    pub goal: Cell2,
+    /// The cells the agent visited, in order.
+    pub path: Vec<Cell2>,
+    /// Whether the agent stood on the goal within the budget, by legal moves.
+    pub success: bool,
+    /// The fewest cells on any path from start to goal under the rule (both included).
+    pub optimal_cells: usize,
+    /// The shortest path length under the rule (orthogonal 1, diagonal sqrt 2).
+    pub optimal_length: f32,
+    /// The path's length.
+    pub length: f32,
+    /// Milliseconds the planner took (all inference included).
+    pub ms: f64,
+}
+
+/// The summary line of an evaluation.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Summary {
+    /// Planner name.
+    pub planner: String,
+    /// Move rule.
+    pub rule: MoveRule,
+    /// Mazes evaluated.
+    pub mazes: usize,
+    /// Pairs evaluated.
+    pub pairs: usize,
+    /// Successful pairs, in percent.
+    pub success_rate: f64,
+    /// Mean of path length / optimal length over successful pairs (1 = optimal); NaN when none
+    /// succeeded.
+    pub path_ratio: f64,
+    /// Mean milliseconds per path, all inference included.
+    pub ms_per_path: f64,
+}
+
+/// Per-pair results and their summary.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Report {
+    /// The summary.
+    pub summary: Summary,
+    /// One entry per pair.
+    pub results: Vec<PairResult>,
+}
+
+/// Whether `path` is a walk of legal moves under `rule` from `start`.
+pub fn is_legal_walk(grid: &Grid2, rule: MoveRule, path: &[Cell2]) -> bool {
+    path.first().is_some_and(|&c| grid.is_free(c))
+        && path.windows(2).all(|w| {
+            let dr = w[1].row as isize - w[0].row as isize;
+            let dc = w[1].col as isize - w[0].col as isize;
+            dr.abs() <= 1 && dc.abs() <= 1 && (dr, dc) != (0, 0) && rule.allows(grid, w[0], dr, dc)
+        })
+}
+
+/// Runs `planner` on every evaluation pair of `mazes` ([`evaluation_pairs`]) by DESIGN.md's
+/// protocol: the agent succeeds when its path is a legal walk from the start that ends on the
+/// goal within `2 x optimal_cells` moves; the path ratio averages length / shortest length over
+/// successes; time covers the planner's whole call. The harness rechecks every path itself
+/// rather than trusting the planner's claim. `progress(done, total)` is called after each pair.
+///
+/// # Errors
+/// A marked start or goal on an obstacle; a planner error.
+pub fn evaluate(planner: &dyn Planner, mazes: &[Maze], cfg: &EvalConfig, progress: &mut dyn FnMut(usize, usize)) -> Result<Report> {
+    let pairs = evaluation_pairs(mazes, cfg.rule, cfg.pairs_per_maze, cfg.seed)?;
+    evaluate_pairs(planner, mazes, &pairs, cfg.rule, progress)
+}
+
+/// [`evaluate`] on given pairs.
+///
+/// # Errors
+/// As [`evaluate`].
+pub fn evaluate_pairs(
+    planner: &dyn Planner,
+    mazes: &[Maze],
+    pairs: &[Pair],
+    rule: MoveRule,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<Report> {
+    let nb = Neighbourhood2::Eight(rule);
+    let mut results = Vec::with_capacity(pairs.len());
+    for (k, p) in pairs.iter().enumerate() {
+        let grid = &mazes[p.maze].grid;
+        let steps = bfs2(grid, &[p.goal], nb)?.get(p.start).unwrap_or(f32::INFINITY);
+        let optimal_length = dijkstra2(grid, &[p.goal], nb, std::f32::consts::SQRT_2)?.get(p.start).unwrap_or(f32::INFINITY);
+        if !steps.is_finite() {
+            return Err(crate::PlanError::Invalid(format!(
+                "maze {}: goal {} cannot be reached from start {} under the {rule} rule",
+                p.maze, p.goal, p.start
+            )));
+        }
+        let optimal_cells = steps as usize + 1;
+        let budget = 2 * optimal_cells;
+        let t = Instant::now();
+        let outcome = planner.plan(grid, p.start, p.goal, budget)?;
+        let ms = t.elapsed().as_secs_f64() * 1e3;
+        let path = outcome.path;
+        let success = path.first() == Some(&p.start)
+            && path.last() == Some(&p.goal)
+            && path.len() - 1 <= budget
+            && is_legal_walk(grid, rule, &path);
+        results.push(PairResult {
+            maze: p.maze,
+            start: p.start,
+            goal: p.goal,
+            length: path_length(&path),
+            path,
+            success,
+            optimal_cells,
+            optimal_length,
+            ms,
+        });
+        progress(k + 1, pairs.len());
+    }
+    let n = results.len();
+    let wins: Vec<&PairResult> = results.iter().filter(|r| r.success).collect();
+    let summary = Summary {
+        planner: planner.name().to_string(),
+        rule,
+        mazes: mazes.len(),
+        pairs: n,
+        success_rate: if n == 0 { 0.0 } else { 100.0 * wins.len() as f64 / n as f64 },
+        path_ratio: if wins.is_empty() {
+            f64::NAN
+        } else {
+            wins.iter().map(|r| (r.length / r.optimal_length.max(f32::MIN_POSITIVE)) as f64).sum::<f64>() / wins.len() as f64
+        },
+        ms_per_path: if n == 0 { 0.0 } else { results.iter().map(|r| r.ms).sum::<f64>() / n as f64 },
+    };
+    Ok(Report { summary, results })
+}

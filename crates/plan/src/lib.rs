@@ -1,0 +1,40 @@
+//! Planning on environment fields, and the evaluation harness.
+//!
+//! - [`Planner`]: plan from a start to a goal on a grid; [`PlanOutcome`] holds the path.
+//! - [`FieldDescent`]: predict the whole field once with any
+//!   [`FieldModel`](envfield_grid::FieldModel), then step to the best neighbour under a
+//!   [`MoveRule`](envfield_grid::MoveRule) (paper section 4.1).
+//! - [`gradient_descent`]: fixed-length steps against the gradient of a continuous field
+//!   (paper Fig. 3c).
+//! - [`AStar`]: octile A* under either move rule.
+//! - [`evaluate`]: DESIGN.md's maze protocol (success within 2 x the fewest path cells, path
+//!   ratio over successes, milliseconds per path), rechecking every path itself.
+//!
+//! ```
+//! use envfield_eikonal::FastMarching;
+//! use envfield_grid::{parse_mazes, MoveRule};
+//! use envfield_plan::{evaluate, AStar, EvalConfig, FieldDescent};
+//!
+//! let mazes = parse_mazes("#######\n#S#...#\n#.#.#.#\n#...#G#\n#######\n")?;
+//! let cfg = EvalConfig { rule: MoveRule::Strict, pairs_per_maze: 1, seed: 0 };
+//! let fmm = FieldDescent::new(FastMarching::default(), MoveRule::Strict);
+//! let report = evaluate(&fmm, &mazes, &cfg, &mut |_, _| {})?;
+//! assert_eq!(report.summary.success_rate, 100.0);
+//! let astar = evaluate(&AStar { rule: MoveRule::Strict }, &mazes, &cfg, &mut |_, _| {})?;
+//! assert!((astar.summary.path_ratio - 1.0).abs() < 1e-6);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+mod astar;
+mod descent;
+mod error;
+mod gradient;
+mod harness;
+mod planner;
+
+pub use astar::AStar;
+pub use descent::{descend, FieldDescent};
+pub use error::{PlanError, Result};
+pub use gradient::{gradient_descent, ContinuousPath, GradientDescentConfig};
+pub use harness::{evaluate, evaluate_pairs, is_legal_walk, EvalConfig, PairResult, Report, Summary};
+pub use planner::{path_length, PlanOutcome, Planner};
