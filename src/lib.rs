@@ -4,6 +4,8 @@
 //!
 //! - [`grid`]: grids, fields, move rules, the maze text format, PNG/.npy I/O, `FieldModel`.
 //! - [`eikonal`]: fast marching (2D/3D, first/second order) and exact graph distances.
+//! - [`mazes`]: maze generators, datasets of target fields, evaluation pairs.
+//! - [`plan`]: planners (field descent, gradient descent, A*) and the evaluation harness.
 //!
 //! ```
 //! use envfield::eikonal::FastMarching;
@@ -17,3 +19,5 @@
 
 pub use envfield_eikonal as eikonal;
 pub use envfield_grid as grid;
+pub use envfield_mazes as mazes;
+pub use envfield_plan as plan;

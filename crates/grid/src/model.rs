@@ -56,3 +56,23 @@ impl ContinuousField2 for Field2 {
         Ok(dr.zip(dc))
     }
 }
+
+impl<M: FieldModel + ?Sized> FieldModel for Box<M> {
+    fn name(&self) -> &str {
+        (**self).name()
+    }
+
+    fn predict(&self, grid: &Grid2, goal: Cell2) -> Result<Field2> {
+        (**self).predict(grid, goal)
+    }
+}
+
+impl<M: FieldModel + ?Sized> FieldModel for &M {
+    fn name(&self) -> &str {
+        (**self).name()
+    }
+
+    fn predict(&self, grid: &Grid2, goal: Cell2) -> Result<Field2> {
+        (**self).predict(grid, goal)
+    }
+}

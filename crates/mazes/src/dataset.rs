@@ -87,7 +87,12 @@ pub struct Dataset {
 pub fn target_field(grid: &Grid2, goal: Cell2, kind: TargetKind) -> Result<Field2> {
     Ok(match kind {
         TargetKind::FastMarching(order) => FastMarching::with_order(order).solve2(grid, &[goal])?,
-        TargetKind::Graph(rule) => dijkstra2(grid, &[goal], Neighbourhood2::Eight(rule), std::f32::consts::SQRT_2)?,
+        TargetKind::Graph(rule) => dijkstra2(
+            grid,
+            &[goal],
+            Neighbourhood2::Eight(rule),
+            std::f32::consts::SQRT_2,
+        )?,
     })
 }
 
@@ -119,25 +124,36 @@ impl Dataset {
                     let mut grid = maze.grid.clone();
                     if cfg.extra_obstacles > 0.0 {
                         for &c in &free {
-                            if c != goal && (rng.below(1 << 20) as f32) < cfg.extra_obstacles * (1 << 20) as f32 {
+                            if c != goal
+                                && (rng.below(1 << 20) as f32)
+                                    < cfg.extra_obstacles * (1 << 20) as f32
+                            {
                                 grid.set_obstacle(c, true)?;
                             }
                         }
                     }
                     let field = target_field(&grid, goal, cfg.target)?;
                     let target = field.values().iter().map(|&d| encode_target(d)).collect();
-                    out.push(Sample { maze: i, grid, goal, target });
+                    out.push(Sample {
+                        maze: i,
+                        grid,
+                        goal,
+                        target,
+                    });
                 }
                 Ok(out)
             })
             .collect();
-        Ok(Self { samples: per_maze?.into_iter().flatten().collect() })
+        Ok(Self {
+            samples: per_maze?.into_iter().flatten().collect(),
+        })
     }
 
     /// Splits by maze: samples of mazes with index `< train_mazes` go to the first set, the
     /// rest to the second. No maze is in both.
     pub fn split_by_maze(self, train_mazes: usize) -> (Dataset, Dataset) {
-        let (a, b): (Vec<Sample>, Vec<Sample>) = self.samples.into_iter().partition(|s| s.maze < train_mazes);
+        let (a, b): (Vec<Sample>, Vec<Sample>) =
+            self.samples.into_iter().partition(|s| s.maze < train_mazes);
         (Dataset { samples: a }, Dataset { samples: b })
     }
 
@@ -149,22 +165,60 @@ impl Dataset {
     /// [`MazeError::Dataset`] when the samples differ in size or the set is empty; I/O errors.
     pub fn save(&self, dir: impl AsRef<Path>) -> Result<()> {
         let dir = dir.as_ref();
-        let bad = |m: &str| MazeError::Dataset { path: dir.display().to_string(), message: m.into() };
-        let first = self.samples.first().ok_or_else(|| bad("no samples to save"))?;
+        let bad = |m: &str| MazeError::Dataset {
+            path: dir.display().to_string(),
+            message: m.into(),
+        };
+        let first = self
+            .samples
+            .first()
+            .ok_or_else(|| bad("no samples to save"))?;
         let (h, w) = (first.grid.rows(), first.grid.cols());
-        if self.samples.iter().any(|s| (s.grid.rows(), s.grid.cols()) != (h, w)) {
+        if self
+            .samples
+            .iter()
+            .any(|s| (s.grid.rows(), s.grid.cols()) != (h, w))
+        {
             return Err(bad("samples have different grid sizes"));
         }
         std::fs::create_dir_all(dir).map_err(|e| bad(&e.to_string()))?;
         let n = self.samples.len();
         let arr = |shape: Vec<usize>, data| NpyArray { shape, data };
-        arr(vec![n, h, w], NpyData::Bool(self.samples.iter().flat_map(|s| s.grid.obstacles().iter().copied()).collect()))
-            .write(dir.join("obstacles.npy"))?;
-        arr(vec![n, 2], NpyData::F64(self.samples.iter().flat_map(|s| [s.goal.row as f64, s.goal.col as f64]).collect()))
-            .write(dir.join("goals.npy"))?;
-        arr(vec![n], NpyData::F64(self.samples.iter().map(|s| s.maze as f64).collect())).write(dir.join("mazes.npy"))?;
-        arr(vec![n, h, w], NpyData::F32(self.samples.iter().flat_map(|s| s.target.iter().copied()).collect()))
-            .write(dir.join("targets.npy"))?;
+        arr(
+            vec![n, h, w],
+            NpyData::Bool(
+                self.samples
+                    .iter()
+                    .flat_map(|s| s.grid.obstacles().iter().copied())
+                    .collect(),
+            ),
+        )
+        .write(dir.join("obstacles.npy"))?;
+        arr(
+            vec![n, 2],
+            NpyData::F64(
+                self.samples
+                    .iter()
+                    .flat_map(|s| [s.goal.row as f64, s.goal.col as f64])
+                    .collect(),
+            ),
+        )
+        .write(dir.join("goals.npy"))?;
+        arr(
+            vec![n],
+            NpyData::F64(self.samples.iter().map(|s| s.maze as f64).collect()),
+        )
+        .write(dir.join("mazes.npy"))?;
+        arr(
+            vec![n, h, w],
+            NpyData::F32(
+                self.samples
+                    .iter()
+                    .flat_map(|s| s.target.iter().copied())
+                    .collect(),
+            ),
+        )
+        .write(dir.join("targets.npy"))?;
         Ok(())
     }
 
@@ -174,13 +228,19 @@ impl Dataset {
     /// [`MazeError::Dataset`] naming the inconsistency; I/O and format errors.
     pub fn load(dir: impl AsRef<Path>) -> Result<Self> {
         let dir = dir.as_ref();
-        let bad = |m: String| MazeError::Dataset { path: dir.display().to_string(), message: m };
+        let bad = |m: String| MazeError::Dataset {
+            path: dir.display().to_string(),
+            message: m,
+        };
         let obstacles = NpyArray::read(dir.join("obstacles.npy"))?;
         let goals = NpyArray::read(dir.join("goals.npy"))?;
         let mazes = NpyArray::read(dir.join("mazes.npy"))?;
         let targets = NpyArray::read(dir.join("targets.npy"))?;
         let [n, h, w] = obstacles.shape[..] else {
-            return Err(bad(format!("obstacles.npy has shape {:?}, expected (N, H, W)", obstacles.shape)));
+            return Err(bad(format!(
+                "obstacles.npy has shape {:?}, expected (N, H, W)",
+                obstacles.shape
+            )));
         };
         if goals.shape != [n, 2] || mazes.shape != [n] || targets.shape != [n, h, w] {
             return Err(bad(format!(
@@ -191,15 +251,23 @@ impl Dataset {
         let (NpyData::Bool(obs), NpyData::F64(goals), NpyData::F64(ids), NpyData::F32(targets)) =
             (obstacles.data, goals.data, mazes.data, targets.data)
         else {
-            return Err(bad("unexpected dtypes (bool, float64, float64, float32 expected)".into()));
+            return Err(bad(
+                "unexpected dtypes (bool, float64, float64, float32 expected)".into(),
+            ));
         };
         let cells = h * w;
         let mut samples = Vec::with_capacity(n);
         for i in 0..n {
             let grid = Grid2::from_obstacles(h, w, obs[i * cells..(i + 1) * cells].to_vec())?;
             let goal = Cell2::new(goals[2 * i] as usize, goals[2 * i + 1] as usize);
-            grid.check_free(goal, "goal").map_err(|e| bad(format!("sample {i}: {e}")))?;
-            samples.push(Sample { maze: ids[i] as usize, grid, goal, target: targets[i * cells..(i + 1) * cells].to_vec() });
+            grid.check_free(goal, "goal")
+                .map_err(|e| bad(format!("sample {i}: {e}")))?;
+            samples.push(Sample {
+                maze: ids[i] as usize,
+                grid,
+                goal,
+                target: targets[i * cells..(i + 1) * cells].to_vec(),
+            });
         }
         Ok(Self { samples })
     }
@@ -238,7 +306,10 @@ mod tests {
             let gi = s.grid.index(s.goal).unwrap();
             assert_eq!(s.target[gi], 1.0);
             for (i, &t) in s.target.iter().enumerate() {
-                assert_eq!(s.grid.obstacles()[i], t == BLOCKED_TARGET && s.grid.obstacles()[i]);
+                assert_eq!(
+                    s.grid.obstacles()[i],
+                    t == BLOCKED_TARGET && s.grid.obstacles()[i]
+                );
             }
         }
         let dir = std::env::temp_dir().join(format!("envfield-ds-{}", std::process::id()));
@@ -249,7 +320,9 @@ mod tests {
         assert!(Dataset::load(&dir).is_err());
         std::fs::remove_dir_all(&dir).unwrap();
         let (train, val) = ds.split_by_maze(4);
-        assert!(train.samples.iter().all(|s| s.maze < 4) && val.samples.iter().all(|s| s.maze >= 4));
+        assert!(
+            train.samples.iter().all(|s| s.maze < 4) && val.samples.iter().all(|s| s.maze >= 4)
+        );
         assert_eq!(train.samples.len() + val.samples.len(), 12);
     }
 }

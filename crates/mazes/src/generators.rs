@@ -297,10 +297,20 @@ fn rooms(n: usize, rng: &mut SplitMix64) -> Result<Grid2> {
             continue;
         }
         // Both rooms of a split keep at least 3 rows (columns).
-        let row_wall = if r1 >= r0 + 7 { pick(r0 + 3, r1 - 4, 0, rng) } else { None };
-        let col_wall = if c1 >= c0 + 7 { pick(c0 + 3, c1 - 4, 0, rng) } else { None };
+        let row_wall = if r1 >= r0 + 7 {
+            pick(r0 + 3, r1 - 4, 0, rng)
+        } else {
+            None
+        };
+        let col_wall = if c1 >= c0 + 7 {
+            pick(c0 + 3, c1 - 4, 0, rng)
+        } else {
+            None
+        };
         let horizontal = match (row_wall, col_wall) {
-            (Some(_), Some(_)) => (r1 - r0) > (c1 - c0) || ((r1 - r0) == (c1 - c0) && rng.below(2) == 0),
+            (Some(_), Some(_)) => {
+                (r1 - r0) > (c1 - c0) || ((r1 - r0) == (c1 - c0) && rng.below(2) == 0)
+            }
             (Some(_), None) => true,
             (None, Some(_)) => false,
             (None, None) => continue,
@@ -341,7 +351,12 @@ fn perfect(n: usize, rng: &mut SplitMix64) -> Result<Grid2> {
         let mut k = 0;
         for (di, dj) in [(-1isize, 0isize), (1, 0), (0, -1), (0, 1)] {
             let (ni, nj) = (i as isize + di, j as isize + dj);
-            if ni >= 0 && nj >= 0 && (ni as usize) < cells && (nj as usize) < cells && !seen[ni as usize * cells + nj as usize] {
+            if ni >= 0
+                && nj >= 0
+                && (ni as usize) < cells
+                && (nj as usize) < cells
+                && !seen[ni as usize * cells + nj as usize]
+            {
                 options[k] = (ni as usize, nj as usize);
                 k += 1;
             }
@@ -391,21 +406,30 @@ mod tests {
     #[test]
     fn perfect_mazes_have_one_path_between_cells() {
         // A tree: free cells = corridor joints + 1 in a 4-connected perfect maze.
-        let m = MazeGenerator::new(GeneratorKind::Perfect, 31).unwrap().generate(3).unwrap();
+        let m = MazeGenerator::new(GeneratorKind::Perfect, 31)
+            .unwrap()
+            .generate(3)
+            .unwrap();
         let g = &m.grid;
         let mut edges = 0;
         for c in g.free_cells() {
             edges += g.neighbours(c, Neighbourhood2::Four).count();
         }
         assert_eq!(edges / 2 + 1, g.free_count());
-        let big = MazeGenerator::new(GeneratorKind::Perfect, 129).unwrap().generate(1).unwrap();
+        let big = MazeGenerator::new(GeneratorKind::Perfect, 129)
+            .unwrap()
+            .generate(1)
+            .unwrap();
         assert!(connected(&big.grid));
     }
 
     #[test]
     fn gridworld_matches_vin_obstacle_density() {
         for (n, lo, hi) in [(8usize, 0.16, 0.25), (16, 0.14, 0.26), (28, 0.15, 0.27)] {
-            let mazes = MazeGenerator::new(GeneratorKind::Gridworld, n).unwrap().generate_many(400, 1).unwrap();
+            let mazes = MazeGenerator::new(GeneratorKind::Gridworld, n)
+                .unwrap()
+                .generate_many(400, 1)
+                .unwrap();
             let interior = ((n - 2) * (n - 2) * mazes.len()) as f64;
             let mut obstacles = 0usize;
             for m in &mazes {
@@ -418,7 +442,10 @@ mod tests {
             }
             let frac = obstacles as f64 / interior;
             println!("gridworld {n}x{n}: interior obstacle fraction {frac:.3}");
-            assert!((lo..hi).contains(&frac), "{n}: interior obstacle fraction {frac}");
+            assert!(
+                (lo..hi).contains(&frac),
+                "{n}: interior obstacle fraction {frac}"
+            );
         }
     }
 }

@@ -23,7 +23,10 @@ mod error;
 mod generators;
 mod pairs;
 
-pub use dataset::{decode_target, encode_target, target_field, Dataset, DatasetConfig, Sample, TargetKind, BLOCKED_TARGET};
+pub use dataset::{
+    decode_target, encode_target, target_field, Dataset, DatasetConfig, Sample, TargetKind,
+    BLOCKED_TARGET,
+};
 pub use error::{MazeError, Result};
 pub use generators::{GeneratorKind, Gridworld, MazeGenerator};
 pub use pairs::{evaluation_pairs, Pair};

@@ -25,14 +25,23 @@ pub struct Pair {
 ///
 /// # Errors
 /// [`MazeError::Grid`] when a marked start or goal is not a free cell.
-pub fn evaluation_pairs(mazes: &[Maze], rule: MoveRule, pairs_per_maze: usize, seed: u64) -> Result<Vec<Pair>> {
+pub fn evaluation_pairs(
+    mazes: &[Maze],
+    rule: MoveRule,
+    pairs_per_maze: usize,
+    seed: u64,
+) -> Result<Vec<Pair>> {
     let nb = Neighbourhood2::Eight(rule);
     let mut out = Vec::new();
     for (i, m) in mazes.iter().enumerate() {
         if let (Some(s), Some(g)) = (m.start, m.goal) {
             m.grid.check_free(s, "start")?;
             m.grid.check_free(g, "goal")?;
-            out.push(Pair { maze: i, start: s, goal: g });
+            out.push(Pair {
+                maze: i,
+                start: s,
+                goal: g,
+            });
             continue;
         }
         if let Some(g) = m.goal {
@@ -49,13 +58,20 @@ pub fn evaluation_pairs(mazes: &[Maze], rule: MoveRule, pairs_per_maze: usize, s
             tries += 1;
             let goal = m.goal.unwrap_or_else(|| free[rng.below(free.len())]);
             let reach = bfs2(&m.grid, &[goal], nb).map_err(MazeError::from)?;
-            let candidates: Vec<Cell2> =
-                free.iter().copied().filter(|&c| c != goal && reach.get(c).is_some_and(f32::is_finite)).collect();
+            let candidates: Vec<Cell2> = free
+                .iter()
+                .copied()
+                .filter(|&c| c != goal && reach.get(c).is_some_and(f32::is_finite))
+                .collect();
             if candidates.is_empty() {
                 continue;
             }
             let start = candidates[rng.below(candidates.len())];
-            out.push(Pair { maze: i, start, goal });
+            out.push(Pair {
+                maze: i,
+                start,
+                goal,
+            });
             made += 1;
         }
     }

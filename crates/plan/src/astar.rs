@@ -38,7 +38,13 @@ impl Planner for AStar {
         "astar"
     }
 
-    fn plan(&self, grid: &Grid2, start: Cell2, goal: Cell2, max_steps: usize) -> Result<PlanOutcome> {
+    fn plan(
+        &self,
+        grid: &Grid2,
+        start: Cell2,
+        goal: Cell2,
+        max_steps: usize,
+    ) -> Result<PlanOutcome> {
         check_query(grid, start, goal)?;
         let n = grid.len();
         let mut g = vec![f32::INFINITY; n];
@@ -67,7 +73,10 @@ impl Planner for AStar {
             }
         }
         if !closed[t] {
-            return Ok(PlanOutcome { path: Vec::new(), success: false });
+            return Ok(PlanOutcome {
+                path: Vec::new(),
+                success: false,
+            });
         }
         let mut path = vec![goal];
         let mut i = t;

@@ -26,7 +26,14 @@ impl<M: FieldModel> FieldDescent<M> {
 }
 
 /// Walks down `field` from `start` (see [`FieldDescent`]).
-pub fn descend(grid: &Grid2, field: &Field2, rule: MoveRule, start: Cell2, goal: Cell2, max_steps: usize) -> PlanOutcome {
+pub fn descend(
+    grid: &Grid2,
+    field: &Field2,
+    rule: MoveRule,
+    start: Cell2,
+    goal: Cell2,
+    max_steps: usize,
+) -> PlanOutcome {
     let mut path = vec![start];
     let mut visited = std::collections::HashSet::new();
     visited.insert(start);
@@ -47,7 +54,10 @@ pub fn descend(grid: &Grid2, field: &Field2, rule: MoveRule, start: Cell2, goal:
             _ => break,
         }
     }
-    PlanOutcome { success: here == goal, path }
+    PlanOutcome {
+        success: here == goal,
+        path,
+    }
 }
 
 impl<M: FieldModel> Planner for FieldDescent<M> {
@@ -55,7 +65,13 @@ impl<M: FieldModel> Planner for FieldDescent<M> {
         &self.name
     }
 
-    fn plan(&self, grid: &Grid2, start: Cell2, goal: Cell2, max_steps: usize) -> Result<PlanOutcome> {
+    fn plan(
+        &self,
+        grid: &Grid2,
+        start: Cell2,
+        goal: Cell2,
+        max_steps: usize,
+    ) -> Result<PlanOutcome> {
         check_query(grid, start, goal)?;
         let field = self.model.predict(grid, goal)?;
         if (field.rows(), field.cols()) != (grid.rows(), grid.cols()) {

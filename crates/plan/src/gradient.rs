@@ -16,7 +16,11 @@ pub struct GradientDescentConfig {
 
 impl Default for GradientDescentConfig {
     fn default() -> Self {
-        Self { step: 0.25, max_steps: 10_000, tolerance: 0.5 }
+        Self {
+            step: 0.25,
+            max_steps: 10_000,
+            tolerance: 0.5,
+        }
     }
 }
 
@@ -43,8 +47,14 @@ impl ContinuousPath {
 /// # Errors
 /// [`PlanError::Invalid`] for bad settings or a start that is not finite; the field's own
 /// errors for a start outside its domain.
-pub fn gradient_descent(field: &dyn ContinuousField2, start: Point2, goal: Point2, cfg: &GradientDescentConfig) -> Result<ContinuousPath> {
-    if !(cfg.step > 0.0 && cfg.step.is_finite() && cfg.tolerance > 0.0 && cfg.tolerance.is_finite()) {
+pub fn gradient_descent(
+    field: &dyn ContinuousField2,
+    start: Point2,
+    goal: Point2,
+    cfg: &GradientDescentConfig,
+) -> Result<ContinuousPath> {
+    if !(cfg.step > 0.0 && cfg.step.is_finite() && cfg.tolerance > 0.0 && cfg.tolerance.is_finite())
+    {
         return Err(PlanError::Invalid(format!(
             "gradient descent needs a positive step and tolerance (got {}, {})",
             cfg.step, cfg.tolerance
@@ -57,7 +67,9 @@ pub fn gradient_descent(field: &dyn ContinuousField2, start: Point2, goal: Point
         if p.distance(goal) <= cfg.tolerance {
             break;
         }
-        let Ok(Some((gr, gc))) = field.gradient(p) else { break };
+        let Ok(Some((gr, gc))) = field.gradient(p) else {
+            break;
+        };
         let norm = gr.hypot(gc);
         if !(norm.is_finite() && norm > 1e-12) {
             break;

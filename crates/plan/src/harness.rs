@@ -88,7 +88,12 @@ pub fn is_legal_walk(grid: &Grid2, rule: MoveRule, path: &[Cell2]) -> bool {
 ///
 /// # Errors
 /// A marked start or goal on an obstacle; a planner error.
-pub fn evaluate(planner: &dyn Planner, mazes: &[Maze], cfg: &EvalConfig, progress: &mut dyn FnMut(usize, usize)) -> Result<Report> {
+pub fn evaluate(
+    planner: &dyn Planner,
+    mazes: &[Maze],
+    cfg: &EvalConfig,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<Report> {
     let pairs = evaluation_pairs(mazes, cfg.rule, cfg.pairs_per_maze, cfg.seed)?;
     evaluate_pairs(planner, mazes, &pairs, cfg.rule, progress)
 }
@@ -108,8 +113,12 @@ pub fn evaluate_pairs(
     let mut results = Vec::with_capacity(pairs.len());
     for (k, p) in pairs.iter().enumerate() {
         let grid = &mazes[p.maze].grid;
-        let steps = bfs2(grid, &[p.goal], nb)?.get(p.start).unwrap_or(f32::INFINITY);
-        let optimal_length = dijkstra2(grid, &[p.goal], nb, std::f32::consts::SQRT_2)?.get(p.start).unwrap_or(f32::INFINITY);
+        let steps = bfs2(grid, &[p.goal], nb)?
+            .get(p.start)
+            .unwrap_or(f32::INFINITY);
+        let optimal_length = dijkstra2(grid, &[p.goal], nb, std::f32::consts::SQRT_2)?
+            .get(p.start)
+            .unwrap_or(f32::INFINITY);
         if !steps.is_finite() {
             return Err(crate::PlanError::Invalid(format!(
                 "maze {}: goal {} cannot be reached from start {} under the {rule} rule",
@@ -146,13 +155,24 @@ pub fn evaluate_pairs(
         rule,
         mazes: mazes.len(),
         pairs: n,
-        success_rate: if n == 0 { 0.0 } else { 100.0 * wins.len() as f64 / n as f64 },
+        success_rate: if n == 0 {
+            0.0
+        } else {
+            100.0 * wins.len() as f64 / n as f64
+        },
         path_ratio: if wins.is_empty() {
             f64::NAN
         } else {
-            wins.iter().map(|r| (r.length / r.optimal_length.max(f32::MIN_POSITIVE)) as f64).sum::<f64>() / wins.len() as f64
+            wins.iter()
+                .map(|r| (r.length / r.optimal_length.max(f32::MIN_POSITIVE)) as f64)
+                .sum::<f64>()
+                / wins.len() as f64
         },
-        ms_per_path: if n == 0 { 0.0 } else { results.iter().map(|r| r.ms).sum::<f64>() / n as f64 },
+        ms_per_path: if n == 0 {
+            0.0
+        } else {
+            results.iter().map(|r| r.ms).sum::<f64>() / n as f64
+        },
     };
     Ok(Report { summary, results })
 }

@@ -36,5 +36,7 @@ pub use astar::AStar;
 pub use descent::{descend, FieldDescent};
 pub use error::{PlanError, Result};
 pub use gradient::{gradient_descent, ContinuousPath, GradientDescentConfig};
-pub use harness::{evaluate, evaluate_pairs, is_legal_walk, EvalConfig, PairResult, Report, Summary};
+pub use harness::{
+    evaluate, evaluate_pairs, is_legal_walk, EvalConfig, PairResult, Report, Summary,
+};
 pub use planner::{path_length, PlanOutcome, Planner};

@@ -26,7 +26,13 @@ impl PlanOutcome {
 /// Length of a path of neighbouring cells (orthogonal 1, diagonal sqrt 2).
 pub fn path_length(path: &[Cell2]) -> f32 {
     path.windows(2)
-        .map(|w| if w[0].row != w[1].row && w[0].col != w[1].col { std::f32::consts::SQRT_2 } else { 1.0 })
+        .map(|w| {
+            if w[0].row != w[1].row && w[0].col != w[1].col {
+                std::f32::consts::SQRT_2
+            } else {
+                1.0
+            }
+        })
         .sum()
 }
 
@@ -44,7 +50,13 @@ pub trait Planner {
     ///
     /// # Errors
     /// Bad input or a failing model.
-    fn plan(&self, grid: &Grid2, start: Cell2, goal: Cell2, max_steps: usize) -> Result<PlanOutcome>;
+    fn plan(
+        &self,
+        grid: &Grid2,
+        start: Cell2,
+        goal: Cell2,
+        max_steps: usize,
+    ) -> Result<PlanOutcome>;
 }
 
 /// Checks that `start` and `goal` are free cells of `grid`.

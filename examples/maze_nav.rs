@@ -1,0 +1,213 @@
+//! Navigate mazes with a planner and report DESIGN.md's metrics.
+//!
+//! ```text
+//! cargo run --release --example maze_nav                       # default suite, a table
+//! cargo run --release --example maze_nav -- --mazes ../shared/data/vin/vin_test_28.txt --rule vin --planner graph --json
+//! cargo run --release --example maze_nav -- --generator perfect --size 41 --count 50 --png out.png --paths paths.json
+//! ```
+
+use anyhow::{bail, Context, Result};
+use clap::Parser;
+use envfield::eikonal::{FastMarching, GraphDistance};
+use envfield::grid::{
+    write_atomic, Cell2, FieldModel, HeatMapStyle, Maze, MoveRule, Neighbourhood2,
+};
+use envfield::mazes::{GeneratorKind, MazeGenerator};
+use envfield::plan::{evaluate, AStar, EvalConfig, FieldDescent, Planner, Report};
+use std::path::PathBuf;
+
+#[derive(Parser)]
+#[command(about = "Navigate mazes with a planner; prints success rate, path ratio and ms per path")]
+struct Args {
+    /// Mazes in the text format (one or more per file). Without it, mazes are generated.
+    #[arg(long)]
+    mazes: Option<PathBuf>,
+    /// Generator: gridworld, crossings, rooms or perfect.
+    #[arg(long, default_value = "gridworld")]
+    generator: String,
+    /// Side of generated mazes. Without --mazes or --size, runs the default suite (8, 16, 28).
+    #[arg(long)]
+    size: Option<usize>,
+    /// Number of generated mazes.
+    #[arg(long, default_value_t = 200)]
+    count: usize,
+    /// Seed of generated mazes and random pairs.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Planners, comma-separated: fmm (fast-marching field descent), graph (exact graph-distance
+    /// field descent under the rule), astar.
+    #[arg(long, default_value = "fmm,graph,astar")]
+    planner: String,
+    /// Move rule: strict or vin.
+    #[arg(long, default_value = "strict")]
+    rule: String,
+    /// Random pairs per maze (mazes with both S and G use that pair).
+    #[arg(long, default_value_t = 1)]
+    pairs: usize,
+    /// Draw the first pair's field, obstacles, path and optimal path to this PNG.
+    #[arg(long)]
+    png: Option<PathBuf>,
+    /// Print one JSON summary line per planner (the last line is the last planner's).
+    #[arg(long)]
+    json: bool,
+    /// Write every planned path to this JSON file.
+    #[arg(long)]
+    paths: Option<PathBuf>,
+}
+
+/// The planners maze_nav knows, with their field models kept for pictures.
+enum Choice {
+    Field(FieldDescent<Box<dyn FieldModel + Send + Sync>>),
+    AStar(AStar),
+}
+
+impl Choice {
+    fn parse(name: &str, rule: MoveRule) -> Result<Self> {
+        let model: Box<dyn FieldModel + Send + Sync> = match name {
+            "fmm" => Box::new(FastMarching::default()),
+            "graph" => Box::new(GraphDistance::new(Neighbourhood2::Eight(rule))),
+            "astar" => return Ok(Choice::AStar(AStar { rule })),
+            other => bail!("unknown planner {other:?} (expected fmm, graph or astar)"),
+        };
+        Ok(Choice::Field(FieldDescent::new(model, rule)))
+    }
+
+    fn planner(&self) -> &dyn Planner {
+        match self {
+            Choice::Field(p) => p,
+            Choice::AStar(p) => p,
+        }
+    }
+
+    fn field_model(&self) -> Option<&dyn FieldModel> {
+        match self {
+            Choice::Field(p) => Some(p.model.as_ref()),
+            Choice::AStar(_) => None,
+        }
+    }
+}
+
+struct Suite {
+    label: String,
+    mazes: Vec<Maze>,
+}
+
+fn draw(
+    path: &PathBuf,
+    choice: &Choice,
+    mazes: &[Maze],
+    report: &Report,
+    rule: MoveRule,
+) -> Result<()> {
+    let first = report.results.first().context("no pair to draw")?;
+    let grid = &mazes[first.maze].grid;
+    let graph = GraphDistance::new(Neighbourhood2::Eight(rule));
+    let field = match choice.field_model() {
+        Some(m) => m.predict(grid, first.goal)?,
+        None => graph.predict(grid, first.goal)?,
+    };
+    let optimal = AStar { rule }
+        .plan(grid, first.start, first.goal, usize::MAX / 4)?
+        .path;
+    let scale = (640 / grid.rows().max(grid.cols())).clamp(2, 32) as u32;
+    let style = HeatMapStyle {
+        scale,
+        grid: Some(grid),
+        path: &first.path,
+        reference_path: &optimal,
+        start: Some(first.start),
+        goal: Some(first.goal),
+    };
+    field.write_png(path, &style)?;
+    eprintln!(
+        "wrote {} (red: {} path, white: optimal path)",
+        path.display(),
+        choice.planner().name()
+    );
+    Ok(())
+}
+
+fn main() -> Result<()> {
+    let args = Args::parse();
+    let rule: MoveRule = args.rule.parse()?;
+    let kind: GeneratorKind = args.generator.parse()?;
+    let suites: Vec<Suite> = match (&args.mazes, args.size) {
+        (Some(file), _) => vec![Suite {
+            label: file
+                .file_name()
+                .map(|f| f.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+            mazes: envfield::grid::read_mazes(file)?,
+        }],
+        (None, Some(size)) => vec![Suite {
+            label: format!("{kind} {size}x{size}"),
+            mazes: MazeGenerator::new(kind, size)?.generate_many(args.count, args.seed)?,
+        }],
+        (None, None) => [8usize, 16, 28]
+            .into_iter()
+            .map(|size| {
+                Ok(Suite {
+                    label: format!("{kind} {size}x{size}"),
+                    mazes: MazeGenerator::new(kind, size)?.generate_many(args.count, args.seed)?,
+                })
+            })
+            .collect::<Result<_>>()?,
+    };
+    let choices: Vec<Choice> = args
+        .planner
+        .split(',')
+        .map(|n| Choice::parse(n.trim(), rule))
+        .collect::<Result<_>>()?;
+    let cfg = EvalConfig {
+        rule,
+        pairs_per_maze: args.pairs,
+        seed: args.seed,
+    };
+
+    let mut all_paths = Vec::new();
+    let mut lines = Vec::new();
+    for suite in &suites {
+        for choice in &choices {
+            let report = evaluate(choice.planner(), &suite.mazes, &cfg, &mut |_, _| {})?;
+            if let Some(png) = &args.png {
+                if lines.is_empty() {
+                    draw(png, choice, &suite.mazes, &report, rule)?;
+                }
+            }
+            let s = &report.summary;
+            lines.push((suite.label.clone(), s.clone()));
+            if args.json {
+                println!("{}", serde_json::to_string(s)?);
+            }
+            for r in &report.results {
+                all_paths.push(serde_json::json!({
+                    "mazes": suite.label, "planner": s.planner, "maze": r.maze,
+                    "start": [r.start.row, r.start.col], "goal": [r.goal.row, r.goal.col],
+                    "cells": r.path.iter().map(|c: &Cell2| [c.row, c.col]).collect::<Vec<_>>(),
+                    "success": r.success,
+                }));
+            }
+        }
+    }
+    if let Some(p) = &args.paths {
+        write_atomic(p, serde_json::to_string(&all_paths)?.as_bytes())?;
+        eprintln!("wrote {} paths to {}", all_paths.len(), p.display());
+    }
+    if !args.json {
+        println!(
+            "rule: {rule}, {} pair(s) per maze without S/G, seed {}",
+            args.pairs, args.seed
+        );
+        println!(
+            "{:<22} {:<8} {:>6} {:>7} {:>10} {:>11} {:>11}",
+            "mazes", "planner", "mazes", "pairs", "success %", "path ratio", "ms/path"
+        );
+        for (label, s) in &lines {
+            println!(
+                "{:<22} {:<8} {:>6} {:>7} {:>10.2} {:>11.4} {:>11.4}",
+                label, s.planner, s.mazes, s.pairs, s.success_rate, s.path_ratio, s.ms_per_path
+            );
+        }
+    }
+    Ok(())
+}
