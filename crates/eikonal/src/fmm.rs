@@ -162,7 +162,7 @@ impl FastMarching {
     ) -> Result<Field2> {
         self.validate()?;
         let shape = format!("{}x{}", grid.rows(), grid.cols());
-        if grid.free_count() == 0 {
+        if !grid.obstacles().contains(&false) {
             return Err(EikonalError::NoFreeCell);
         }
         if let Some(speed) = options.speed {
@@ -229,7 +229,7 @@ impl FastMarching {
         self.validate()?;
         let [nx, ny, nz] = grid.shape();
         let shape = format!("{nx}x{ny}x{nz}");
-        if grid.free_count() == 0 {
+        if !grid.obstacles().contains(&false) {
             return Err(EikonalError::NoFreeCell);
         }
         if let Some(speed) = options.speed {

@@ -1,5 +1,5 @@
-//! The priority queue of fast marching: an indexed 4-ary min-heap of packed `(value, cell)`
-//! words.
+//! The priority queue of fast marching: an indexed d-ary min-heap (d = `ARITY`) of packed
+//! `(value, cell)` words.
 //!
 //! Fast marching spends about half its time here, so the layout is tuned. A tentative value is
 //! a non-negative f32, whose bit pattern orders like the value, so an entry is one `u64`
@@ -7,9 +7,11 @@
 //! at most once; a position table lets its value move in either direction (second-order updates
 //! may raise a tentative value). `pop` walks the hole down to a leaf along the smallest
 //! children before sifting the last entry up ("bottom-up" deletion), which saves most
-//! comparisons because the last entry of a front belongs near the bottom.
+//! comparisons because the last entry of a front belongs near the bottom. `ARITY` 2 ran about
+//! 15% fewer instructions than 4 or 8 here (callgrind on 28^2 and 256^2 grids), and no slower
+//! on 1024^2.
 
-const ARITY: usize = 4;
+const ARITY: usize = 2;
 
 const NONE: u32 = u32::MAX;
 

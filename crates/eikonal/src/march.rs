@@ -197,6 +197,16 @@ impl<const N: usize> Marcher<N> {
                 return u.min(min_a1 + tau);
             }
         }
+        if N == 2 {
+            // Closed form of the 2D first-order update (the common case), branch-light.
+            let (lo, hi) = (a[0].min(a[1]), a[0].max(a[1]));
+            let d = hi - lo;
+            return if d >= tau {
+                lo + tau
+            } else {
+                0.5 * (lo + hi + (2.0 * tau * tau - d * d).sqrt())
+            };
+        }
         // First order always has a real root once sorted (u > v implies a real crossing).
         Self::solve(first, tau)
             .unwrap_or(min_a1 + tau)

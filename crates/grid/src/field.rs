@@ -51,7 +51,7 @@ impl Field2 {
     /// # Errors
     /// [`GridError::LengthMismatch`] or [`GridError::InvalidShape`].
     pub fn new(rows: usize, cols: usize, values: Vec<f32>) -> Result<Self> {
-        crate::Grid2::new(rows, cols)?;
+        crate::grid::checked_len(&[rows, cols])?;
         if values.len() != rows * cols {
             return Err(GridError::LengthMismatch {
                 len: values.len(),
@@ -67,7 +67,7 @@ impl Field2 {
     /// # Errors
     /// [`GridError::InvalidShape`].
     pub fn filled(rows: usize, cols: usize, value: f32) -> Result<Self> {
-        crate::Grid2::new(rows, cols)?;
+        crate::grid::checked_len(&[rows, cols])?;
         Ok(Self {
             rows,
             cols,
@@ -167,7 +167,7 @@ impl Field3 {
     /// # Errors
     /// [`GridError::LengthMismatch`] or [`GridError::InvalidShape`].
     pub fn new(shape: [usize; 3], values: Vec<f32>) -> Result<Self> {
-        crate::Grid3::new(shape[0], shape[1], shape[2])?;
+        crate::grid::checked_len(&shape)?;
         let n = shape.iter().product();
         if values.len() != n {
             return Err(GridError::LengthMismatch {

@@ -1,7 +1,7 @@
 use crate::{Cell2, Cell3, GridError, Result};
 use serde::{Deserialize, Serialize};
 
-fn checked_len(shape: &[usize]) -> Result<usize> {
+pub(crate) fn checked_len(shape: &[usize]) -> Result<usize> {
     if shape.contains(&0) {
         return Err(GridError::InvalidShape {
             shape: shape.to_vec(),

@@ -97,12 +97,24 @@ mod tests {
     fn descends_a_distance_field_along_the_straight_line() {
         let grid = Grid2::new(40, 40).unwrap();
         let goal = Cell2::new(20, 22);
-        let field = FastMarching::with_order(Order::Second).solve2(&grid, &[goal]).unwrap();
+        let field = FastMarching::with_order(Order::Second)
+            .solve2(&grid, &[goal])
+            .unwrap();
         let start = Point2::new(3.0, 4.5);
-        let path = gradient_descent(&field, start, goal.center(), &GradientDescentConfig::default()).unwrap();
+        let path = gradient_descent(
+            &field,
+            start,
+            goal.center(),
+            &GradientDescentConfig::default(),
+        )
+        .unwrap();
         assert!(path.success);
         let straight = start.distance(goal.center());
-        assert!(path.length() < straight * 1.03 + 0.5, "{} vs {straight}", path.length());
+        assert!(
+            path.length() < straight * 1.03 + 0.5,
+            "{} vs {straight}",
+            path.length()
+        );
     }
 
     #[test]
@@ -111,12 +123,31 @@ mod tests {
         for r in 0..20 {
             grid.set_obstacle(Cell2::new(r, 10), true).unwrap();
         }
-        let field = FastMarching::default().solve2(&grid, &[Cell2::new(5, 15)]).unwrap();
+        let field = FastMarching::default()
+            .solve2(&grid, &[Cell2::new(5, 15)])
+            .unwrap();
         // The left half is unreachable: no gradient, no step, no success.
-        let path = gradient_descent(&field, Point2::new(5.0, 3.0), Point2::new(5.0, 15.0), &GradientDescentConfig::default()).unwrap();
+        let path = gradient_descent(
+            &field,
+            Point2::new(5.0, 3.0),
+            Point2::new(5.0, 15.0),
+            &GradientDescentConfig::default(),
+        )
+        .unwrap();
         assert!(!path.success && path.points.len() == 1);
-        let bad = GradientDescentConfig { step: 0.0, ..Default::default() };
-        assert!(gradient_descent(&field, Point2::new(5.0, 12.0), Point2::new(5.0, 15.0), &bad).is_err());
-        assert!(gradient_descent(&field, Point2::new(f32::NAN, 12.0), Point2::new(5.0, 15.0), &GradientDescentConfig::default()).is_err());
+        let bad = GradientDescentConfig {
+            step: 0.0,
+            ..Default::default()
+        };
+        assert!(
+            gradient_descent(&field, Point2::new(5.0, 12.0), Point2::new(5.0, 15.0), &bad).is_err()
+        );
+        assert!(gradient_descent(
+            &field,
+            Point2::new(f32::NAN, 12.0),
+            Point2::new(5.0, 15.0),
+            &GradientDescentConfig::default()
+        )
+        .is_err());
     }
 }
