@@ -13,12 +13,26 @@
 
 const ARITY: usize = 2;
 
-const NONE: u32 = u32::MAX;
+/// Per-cell record of the marcher: the accepted value (infinity until accepted) and a tag
+/// that is the cell's heap position while it is queued, or one of [`FAR`], [`BLOCKED`],
+/// [`KNOWN`]. One 8-byte record per cell, so a stencil touches one cache line per neighbour
+/// rather than one per array.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(8))]
+pub(crate) struct Rec {
+    pub known: f32,
+    pub tag: u32,
+}
+
+/// Not reached yet.
+pub(crate) const FAR: u32 = u32::MAX;
+/// An obstacle, a zero-speed cell or padding: never entered.
+pub(crate) const BLOCKED: u32 = u32::MAX - 1;
+/// Accepted.
+pub(crate) const KNOWN: u32 = u32::MAX - 2;
 
 pub(crate) struct IndexedHeap {
     entries: Vec<u64>,
-    /// Heap position of each cell, or `NONE`.
-    slot: Vec<u32>,
 }
 
 /// Packs a non-negative finite value and a cell index into one ordered word.
@@ -35,38 +49,38 @@ pub(crate) fn unpack(entry: u64) -> (f32, u32) {
 }
 
 impl IndexedHeap {
-    pub(crate) fn new(cells: usize) -> Self {
+    pub(crate) fn new() -> Self {
         Self {
             entries: Vec::with_capacity(1024),
-            slot: vec![NONE; cells],
         }
     }
 
-    /// Queues `cell` with `value`, or moves it to `value` when it is queued already.
+    /// Queues `cell` with `value`, or moves it to `value` when it is queued already (its tag
+    /// is then its position).
     #[inline]
-    pub(crate) fn set(&mut self, value: f32, cell: u32) {
+    pub(crate) fn set(&mut self, value: f32, cell: u32, recs: &mut [Rec]) {
         let entry = pack(value, cell);
-        let s = self.slot[cell as usize];
-        if s == NONE {
+        let s = recs[cell as usize].tag;
+        if s >= KNOWN {
             let k = self.entries.len();
             self.entries.push(entry);
-            self.sift_up(k, entry);
+            self.sift_up(k, entry, recs);
         } else if entry < self.entries[s as usize] {
-            self.sift_up(s as usize, entry);
+            self.sift_up(s as usize, entry, recs);
         } else {
-            self.sift_down(s as usize, entry);
+            self.sift_down(s as usize, entry, recs);
         }
     }
 
     /// Puts `entry` at heap position `k < entries.len()`.
     #[inline]
-    fn place(&mut self, k: usize, entry: u64) {
-        debug_assert!(k < self.entries.len() && ((entry as u32) as usize) < self.slot.len());
+    fn place(&mut self, k: usize, entry: u64, recs: &mut [Rec]) {
+        debug_assert!(k < self.entries.len() && ((entry as u32) as usize) < recs.len());
         // SAFETY: callers pass a position inside the heap, and every entry's cell was checked
-        // against `slot` when `set` queued it.
+        // against `recs` when `set` queued it.
         unsafe {
             *self.entries.get_unchecked_mut(k) = entry;
-            *self.slot.get_unchecked_mut(entry as u32 as usize) = k as u32;
+            recs.get_unchecked_mut(entry as u32 as usize).tag = k as u32;
         }
     }
 
@@ -95,36 +109,35 @@ impl IndexedHeap {
     }
 
     #[inline]
-    fn sift_down(&mut self, mut k: usize, entry: u64) {
+    fn sift_down(&mut self, mut k: usize, entry: u64, recs: &mut [Rec]) {
         while let Some((child, key)) = self.min_child(k) {
             if key >= entry {
                 break;
             }
-            self.place(k, key);
+            self.place(k, key, recs);
             k = child;
         }
-        self.place(k, entry);
+        self.place(k, entry, recs);
     }
 
-    /// Removes and returns the entry of smallest value.
+    /// Removes and returns the entry of smallest value. The caller retags its cell.
     #[inline]
-    pub(crate) fn pop(&mut self) -> Option<u64> {
+    pub(crate) fn pop(&mut self, recs: &mut [Rec]) -> Option<u64> {
         let top = *self.entries.first()?;
-        self.slot[(top as u32) as usize] = NONE;
         let last = self.entries.pop().expect("non-empty");
         if !self.entries.is_empty() {
             let mut hole = 0;
             while let Some((child, key)) = self.min_child(hole) {
-                self.place(hole, key);
+                self.place(hole, key, recs);
                 hole = child;
             }
-            self.sift_up(hole, last);
+            self.sift_up(hole, last, recs);
         }
         Some(top)
     }
 
     #[inline]
-    fn sift_up(&mut self, mut k: usize, entry: u64) {
+    fn sift_up(&mut self, mut k: usize, entry: u64, recs: &mut [Rec]) {
         while k > 0 {
             let parent = (k - 1) / ARITY;
             // SAFETY: `parent < k < entries.len()`.
@@ -132,10 +145,10 @@ impl IndexedHeap {
             if p <= entry {
                 break;
             }
-            self.place(k, p);
+            self.place(k, p, recs);
             k = parent;
         }
-        self.place(k, entry);
+        self.place(k, entry, recs);
     }
 }
 
@@ -155,20 +168,28 @@ mod tests {
     #[test]
     fn pops_many_pseudo_random_keys_in_order_after_moves() {
         let n = 5000u32;
-        let mut h = IndexedHeap::new(n as usize);
+        let mut h = IndexedHeap::new();
+        let mut recs = vec![
+            Rec {
+                known: f32::INFINITY,
+                tag: FAR
+            };
+            n as usize
+        ];
         let key = |i: u32| ((i as u64 * 2_654_435_761) % 10_007) as f32;
         for i in 0..n {
-            h.set(key(i) + 20_000.0, i);
+            h.set(key(i) + 20_000.0, i, &mut recs);
         }
         for i in (0..n).step_by(3) {
-            h.set(key(i), i); // lower a third of them
+            h.set(key(i), i, &mut recs); // lower a third of them
         }
         for i in (1..n).step_by(3) {
-            h.set(key(i) + 40_000.0, i); // raise another third
+            h.set(key(i) + 40_000.0, i, &mut recs); // raise another third
         }
         let mut last = 0u64;
         let mut count = 0;
-        while let Some(e) = h.pop() {
+        while let Some(e) = h.pop(&mut recs) {
+            recs[(e as u32) as usize].tag = KNOWN;
             let (v, i) = unpack(e);
             let expect = key(i) + [0.0, 40_000.0, 20_000.0][(i % 3) as usize];
             assert_eq!(v, expect);

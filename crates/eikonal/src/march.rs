@@ -3,12 +3,8 @@
 //! Cells live in a padded array (two blocked cells on every side), so the first- and
 //! second-order stencils never need bounds checks.
 
-use crate::heap::{unpack, IndexedHeap};
+use crate::heap::{unpack, IndexedHeap, Rec, BLOCKED, FAR, KNOWN};
 
-const FAR: u8 = 0;
-const TRIAL: u8 = 1;
-const KNOWN: u8 = 2;
-const BLOCKED: u8 = 3;
 const PAD: usize = 2;
 
 /// One eikonal problem on an N-dimensional grid, already validated by the caller.
@@ -83,11 +79,11 @@ impl<const N: usize> Lattice<N> {
 
 struct Marcher<const N: usize> {
     strides: [usize; N],
-    /// Value of each accepted cell; infinity for every other cell, so the stencil reads one
-    /// array without looking at the state. f32 keeps the working set small (the stencil is
-    /// memory-bound on large grids); arithmetic is in f64. Tentative values live in the heap.
-    known: Vec<f32>,
-    state: Vec<u8>,
+    /// Per cell: the accepted value (infinity for every other cell, so the stencil reads values
+    /// without looking at the state) and the state tag. f32 keeps the working set small (the
+    /// stencil is memory-bound on large grids); arithmetic is in f64. Tentative values live in
+    /// the heap.
+    recs: Vec<Rec>,
     /// Travel time across one cell (spacing / speed) per padded cell, when speeds vary.
     tau: Option<Vec<f64>>,
     tau_uniform: f64,
@@ -162,7 +158,7 @@ impl<const N: usize> Marcher<N> {
     #[inline]
     fn estimate(&self, q: usize) -> f64 {
         let tau = self.tau(q);
-        let known = &self.known[..];
+        let recs = &self.recs[..];
         let mut a = [f64::INFINITY; N];
         let mut far = [0usize; N];
         for k in 0..N {
@@ -170,8 +166,8 @@ impl<const N: usize> Marcher<N> {
             // SAFETY: `q` is a real cell, so `q ± 2s` lies inside the two-cell padding.
             let (a_lo, a_hi) = unsafe {
                 (
-                    *known.get_unchecked(q - s) as f64,
-                    *known.get_unchecked(q + s) as f64,
+                    recs.get_unchecked(q - s).known as f64,
+                    recs.get_unchecked(q + s).known as f64,
                 )
             };
             let lo = a_lo <= a_hi;
@@ -188,7 +184,7 @@ impl<const N: usize> Marcher<N> {
             let mut terms = first;
             for k in 0..N {
                 // SAFETY: as above.
-                let a2 = unsafe { *known.get_unchecked(far[k]) as f64 };
+                let a2 = unsafe { recs.get_unchecked(far[k]).known as f64 };
                 if a[k].is_finite() && a2 <= a[k] {
                     terms[k] = ((4.0 * a[k] - a2) / 3.0, 2.25, a[k]);
                 }
@@ -219,11 +215,10 @@ impl<const N: usize> Marcher<N> {
             let s = self.strides[k];
             for q in [i - s, i + s] {
                 // SAFETY: neighbours of a real cell lie inside the padding.
-                let st = unsafe { *self.state.get_unchecked(q) };
-                if st == FAR || st == TRIAL {
+                let tag = unsafe { self.recs.get_unchecked(q).tag };
+                if tag != KNOWN && tag != BLOCKED {
                     let u = self.estimate(q) as f32;
-                    self.state[q] = TRIAL;
-                    self.heap.set(u, q as u32);
+                    self.heap.set(u, q as u32, &mut self.recs);
                 }
             }
         }
@@ -233,12 +228,18 @@ impl<const N: usize> Marcher<N> {
 /// Runs fast marching and returns the C-order values (f32; infinity where not reached).
 pub(crate) fn march<const N: usize>(p: &Problem<'_, N>) -> Vec<f32> {
     let lat = Lattice::new(p.dims);
-    let mut state = vec![BLOCKED; lat.len];
+    let mut recs = vec![
+        Rec {
+            known: f32::INFINITY,
+            tag: BLOCKED
+        };
+        lat.len
+    ];
     let mut tau = p.speed.map(|_| vec![f64::INFINITY; lat.len]);
     lat.for_each(|o, i| {
         let speed = p.speed.map_or(1.0, |s| s[o]);
         if !p.obstacles[o] && speed > 0.0 {
-            state[i] = FAR;
+            recs[i].tag = FAR;
             if let Some(t) = tau.as_mut() {
                 t[i] = p.spacing / speed as f64;
             }
@@ -246,12 +247,11 @@ pub(crate) fn march<const N: usize>(p: &Problem<'_, N>) -> Vec<f32> {
     });
     let mut m = Marcher::<N> {
         strides: lat.strides,
-        known: vec![f32::INFINITY; lat.len],
-        state,
+        recs,
         tau,
         tau_uniform: p.spacing,
         second_order: p.second_order,
-        heap: IndexedHeap::new(lat.len),
+        heap: IndexedHeap::new(),
     };
 
     // Exact initialisation around each source.
@@ -274,31 +274,33 @@ pub(crate) fn march<const N: usize>(p: &Problem<'_, N>) -> Vec<f32> {
                 inside &= c >= 0 && (c as usize) < p.dims[k];
                 cell[k] = c.max(0) as usize;
             }
-            if inside && line_of_sight(&m.state, &lat, *src, off) {
+            if inside && line_of_sight(&m.recs, &lat, *src, off) {
                 let ci = lat.padded(cell);
                 let len = off.iter().map(|&o| (o * o) as f64).sum::<f64>().sqrt();
                 let t = (len * 0.5 * (m.tau(si) + m.tau(ci))) as f32;
-                if t < m.known[ci] {
-                    m.known[ci] = t;
+                if t < m.recs[ci].known {
+                    m.recs[ci].known = t;
                 }
                 frozen.push(ci);
             }
         }
     }
     for &i in &frozen {
-        m.state[i] = KNOWN;
+        m.recs[i].tag = KNOWN;
     }
     let stop = p.stop_at.map(|c| lat.padded(c));
-    let stopped_early = stop.is_some_and(|s| m.state[s] == KNOWN);
+    let stopped_early = stop.is_some_and(|s| m.recs[s].tag == KNOWN);
     if !stopped_early {
         for &i in &frozen {
             m.update_neighbours(i);
         }
-        while let Some(entry) = m.heap.pop() {
+        while let Some(entry) = m.heap.pop(&mut m.recs) {
             let (value, i) = unpack(entry);
             let i = i as usize;
-            m.state[i] = KNOWN;
-            m.known[i] = value;
+            m.recs[i] = Rec {
+                known: value,
+                tag: KNOWN,
+            };
             if Some(i) == stop {
                 break;
             }
@@ -308,14 +310,14 @@ pub(crate) fn march<const N: usize>(p: &Problem<'_, N>) -> Vec<f32> {
 
     let mut out = vec![f32::INFINITY; p.obstacles.len()];
     lat.for_each(|o, i| {
-        out[o] = m.known[i];
+        out[o] = m.recs[i].known;
     });
     out
 }
 
 /// Whether every cell of the box between `src` and `src + off` is enterable.
 fn line_of_sight<const N: usize>(
-    state: &[u8],
+    recs: &[Rec],
     lat: &Lattice<N>,
     src: [usize; N],
     off: [isize; N],
@@ -329,7 +331,7 @@ fn line_of_sight<const N: usize>(
     }
     let mut idx = lo;
     loop {
-        if state[lat.padded(idx)] == BLOCKED {
+        if recs[lat.padded(idx)].tag == BLOCKED {
             return false;
         }
         let mut k = N;
