@@ -113,6 +113,35 @@ fn check_speeds(values: &[f32], cell_name: impl Fn(usize) -> String) -> Result<(
     }
 }
 
+/// Checks every source (inside, free, non-zero speed) and returns their coordinates.
+fn check_sources<C: Copy + std::fmt::Display, const N: usize>(
+    sources: &[C],
+    index: impl Fn(C) -> Option<usize>,
+    coords: impl Fn(C) -> [usize; N],
+    obstacles: &[bool],
+    speed: Option<&[f32]>,
+    shape: &str,
+) -> Result<Vec<[usize; N]>> {
+    if sources.is_empty() {
+        return Err(EikonalError::NoSources);
+    }
+    sources
+        .iter()
+        .map(|&s| {
+            let i = index(s).ok_or_else(|| EikonalError::SourceOutside {
+                cell: s.to_string(),
+                shape: shape.to_string(),
+            })?;
+            if obstacles[i] || speed.is_some_and(|v| v[i] == 0.0) {
+                return Err(EikonalError::SourceOnObstacle {
+                    cell: s.to_string(),
+                });
+            }
+            Ok(coords(s))
+        })
+        .collect()
+}
+
 impl FastMarching {
     /// A solver of the given order with the default spacing and source initialisation.
     pub fn with_order(order: Order) -> Self {
@@ -174,24 +203,14 @@ impl FastMarching {
             }
             check_speeds(speed.values(), |i| grid.cell(i).to_string())?;
         }
-        if sources.is_empty() {
-            return Err(EikonalError::NoSources);
-        }
-        let mut src = Vec::with_capacity(sources.len());
-        for &s in sources {
-            let Some(i) = grid.index(s) else {
-                return Err(EikonalError::SourceOutside {
-                    cell: s.to_string(),
-                    shape,
-                });
-            };
-            if grid.obstacles()[i] || options.speed.is_some_and(|f| f.values()[i] == 0.0) {
-                return Err(EikonalError::SourceOnObstacle {
-                    cell: s.to_string(),
-                });
-            }
-            src.push([s.row, s.col]);
-        }
+        let src = check_sources(
+            sources,
+            |s| grid.index(s),
+            |s| [s.row, s.col],
+            grid.obstacles(),
+            options.speed.map(Field2::values),
+            &shape,
+        )?;
         if let Some(stop) = options.stop_at {
             grid.check(stop)?;
         }
@@ -242,24 +261,14 @@ impl FastMarching {
             }
             check_speeds(speed.values(), |i| grid.cell(i).to_string())?;
         }
-        if sources.is_empty() {
-            return Err(EikonalError::NoSources);
-        }
-        let mut src = Vec::with_capacity(sources.len());
-        for &s in sources {
-            let Some(i) = grid.index(s) else {
-                return Err(EikonalError::SourceOutside {
-                    cell: s.to_string(),
-                    shape,
-                });
-            };
-            if grid.obstacles()[i] || options.speed.is_some_and(|f| f.values()[i] == 0.0) {
-                return Err(EikonalError::SourceOnObstacle {
-                    cell: s.to_string(),
-                });
-            }
-            src.push([s.x, s.y, s.z]);
-        }
+        let src = check_sources(
+            sources,
+            |s| grid.index(s),
+            |s| [s.x, s.y, s.z],
+            grid.obstacles(),
+            options.speed.map(Field3::values),
+            &shape,
+        )?;
         if let Some(stop) = options.stop_at {
             grid.check(stop)?;
         }
