@@ -168,7 +168,20 @@ fn main() -> Result<()> {
     let mut lines = Vec::new();
     for suite in &suites {
         for choice in &choices {
-            let report = evaluate(choice.planner(), &suite.mazes, &cfg, &mut |_, _| {})?;
+            let bar = indicatif::ProgressBar::new(0).with_message(format!(
+                "{} {}",
+                suite.label,
+                choice.planner().name()
+            ));
+            bar.set_style(
+                indicatif::ProgressStyle::with_template("{msg:>28} {bar:30} {pos}/{len} pairs")
+                    .expect("valid template"),
+            );
+            let report = evaluate(choice.planner(), &suite.mazes, &cfg, &mut |done, total| {
+                bar.set_length(total as u64);
+                bar.set_position(done as u64);
+            })?;
+            bar.finish_and_clear();
             if let Some(png) = &args.png {
                 if lines.is_empty() {
                     draw(png, choice, &suite.mazes, &report, rule)?;
