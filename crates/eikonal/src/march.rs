@@ -155,7 +155,7 @@ impl<const N: usize> Marcher<N> {
     }
 
     /// The tentative value of cell `q` from its accepted neighbours.
-    #[inline]
+    #[inline(always)]
     fn estimate(&self, q: usize) -> f64 {
         let tau = self.tau(q);
         let recs = &self.recs[..];
@@ -209,7 +209,7 @@ impl<const N: usize> Marcher<N> {
             .min(min_a1 + tau)
     }
 
-    #[inline]
+    #[inline(always)]
     fn update_neighbours(&mut self, i: usize) {
         for k in 0..N {
             let s = self.strides[k];
