@@ -29,11 +29,14 @@ EXAMPLE = os.path.join(ROOT, "target", "release", "examples", "fmm")
 
 def scatter(shape, frac, max_side, rng):
     mask = np.zeros(shape, dtype=bool)
-    n = mask.size
-    while mask.sum() < frac * n:
+    target = frac * mask.size
+    filled = 0
+    while filled < target:
         side = int(rng.integers(1, max_side + 1))
         corner = [int(rng.integers(0, d)) for d in shape]
-        mask[tuple(slice(c, c + side) for c in corner)] = True
+        block = tuple(slice(c, c + side) for c in corner)
+        filled += int((~mask[block]).sum())
+        mask[block] = True
     centre = tuple(d // 2 for d in shape)
     mask[centre] = False
     return mask, centre
