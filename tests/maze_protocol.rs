@@ -252,3 +252,25 @@ fn bad_queries_are_errors() {
     .plan(&maze.grid, Cell2::new(1, 1), Cell2::new(0, 3), 10)
     .is_err());
 }
+
+#[test]
+fn pairs_naming_missing_mazes_or_walls_are_errors() {
+    use envfield::mazes::Pair;
+    use envfield::plan::evaluate_pairs;
+    let mazes = parse_mazes("#####\n#S.G#\n#####\n").unwrap();
+    let astar = AStar {
+        rule: MoveRule::Strict,
+    };
+    let bad_maze = [Pair {
+        maze: 3,
+        start: Cell2::new(1, 1),
+        goal: Cell2::new(1, 3),
+    }];
+    assert!(evaluate_pairs(&astar, &mazes, &bad_maze, MoveRule::Strict, &mut |_, _| {}).is_err());
+    let on_wall = [Pair {
+        maze: 0,
+        start: Cell2::new(0, 0),
+        goal: Cell2::new(1, 3),
+    }];
+    assert!(evaluate_pairs(&astar, &mazes, &on_wall, MoveRule::Strict, &mut |_, _| {}).is_err());
+}

@@ -112,7 +112,18 @@ pub fn evaluate_pairs(
     let nb = Neighbourhood2::Eight(rule);
     let mut results = Vec::with_capacity(pairs.len());
     for (k, p) in pairs.iter().enumerate() {
-        let grid = &mazes[p.maze].grid;
+        let grid = &mazes
+            .get(p.maze)
+            .ok_or_else(|| {
+                crate::PlanError::Invalid(format!(
+                    "pair {k} names maze {} of {}",
+                    p.maze,
+                    mazes.len()
+                ))
+            })?
+            .grid;
+        grid.check_free(p.start, "start")?;
+        grid.check_free(p.goal, "goal")?;
         let steps = bfs2(grid, &[p.goal], nb)?
             .get(p.start)
             .unwrap_or(f32::INFINITY);
