@@ -1,4 +1,5 @@
 use crate::march::{march, Problem};
+use crate::sources::check_sources;
 use crate::{EikonalError, Result};
 use envfield_grid::{Cell2, Cell3, Field2, Field3, FieldModel, Grid2, Grid3};
 use rayon::prelude::*;
@@ -113,35 +114,6 @@ fn check_speeds(values: &[f32], cell_name: impl Fn(usize) -> String) -> Result<(
     }
 }
 
-/// Checks every source (inside, free, non-zero speed) and returns their coordinates.
-fn check_sources<C: Copy + std::fmt::Display, const N: usize>(
-    sources: &[C],
-    index: impl Fn(C) -> Option<usize>,
-    coords: impl Fn(C) -> [usize; N],
-    obstacles: &[bool],
-    speed: Option<&[f32]>,
-    shape: &str,
-) -> Result<Vec<[usize; N]>> {
-    if sources.is_empty() {
-        return Err(EikonalError::NoSources);
-    }
-    sources
-        .iter()
-        .map(|&s| {
-            let i = index(s).ok_or_else(|| EikonalError::SourceOutside {
-                cell: s.to_string(),
-                shape: shape.to_string(),
-            })?;
-            if obstacles[i] || speed.is_some_and(|v| v[i] == 0.0) {
-                return Err(EikonalError::SourceOnObstacle {
-                    cell: s.to_string(),
-                });
-            }
-            Ok(coords(s))
-        })
-        .collect()
-}
-
 impl FastMarching {
     /// A solver of the given order with the default spacing and source initialisation.
     pub fn with_order(order: Order) -> Self {
@@ -206,10 +178,10 @@ impl FastMarching {
         let src = check_sources(
             sources,
             |s| grid.index(s),
-            |s| [s.row, s.col],
             grid.obstacles(),
             options.speed.map(Field2::values),
             &shape,
+            |s, _| [s.row, s.col],
         )?;
         if let Some(stop) = options.stop_at {
             grid.check(stop)?;
@@ -264,10 +236,10 @@ impl FastMarching {
         let src = check_sources(
             sources,
             |s| grid.index(s),
-            |s| [s.x, s.y, s.z],
             grid.obstacles(),
             options.speed.map(Field3::values),
             &shape,
+            |s, _| [s.x, s.y, s.z],
         )?;
         if let Some(stop) = options.stop_at {
             grid.check(stop)?;

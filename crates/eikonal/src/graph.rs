@@ -1,5 +1,6 @@
 //! Exact shortest-path distances on the move graph of a grid.
 
+use crate::sources::check_sources;
 use crate::{EikonalError, Result};
 use envfield_grid::{
     Cell2, Cell3, Field2, Field3, FieldModel, Grid2, Grid3, Neighbourhood2, Neighbourhood3,
@@ -24,7 +25,8 @@ impl Ord for Entry {
     }
 }
 
-fn check_sources<C: Copy + std::fmt::Display>(
+/// The sources' cell indices, after the checks of [`check_sources`] and a grid with a free cell.
+fn source_indices<C: Copy + std::fmt::Display>(
     sources: &[C],
     index: impl Fn(C) -> Option<usize>,
     obstacles: &[bool],
@@ -33,24 +35,10 @@ fn check_sources<C: Copy + std::fmt::Display>(
     if sources.is_empty() {
         return Err(EikonalError::NoSources);
     }
-    if obstacles.iter().all(|&o| o) {
+    if !obstacles.contains(&false) {
         return Err(EikonalError::NoFreeCell);
     }
-    sources
-        .iter()
-        .map(|&s| {
-            let i = index(s).ok_or_else(|| EikonalError::SourceOutside {
-                cell: s.to_string(),
-                shape: shape.to_string(),
-            })?;
-            if obstacles[i] {
-                return Err(EikonalError::SourceOnObstacle {
-                    cell: s.to_string(),
-                });
-            }
-            Ok(i)
-        })
-        .collect()
+    check_sources(sources, index, obstacles, None, shape, |_, i| i)
 }
 
 /// Dijkstra over cells: `neighbours(i, push)` calls `push(j, step_cost)` for each move from `i`.
@@ -129,7 +117,7 @@ pub fn dijkstra2(
         )));
     }
     let shape = format!("{}x{}", grid.rows(), grid.cols());
-    let src = check_sources(sources, |c| grid.index(c), grid.obstacles(), &shape)?;
+    let src = source_indices(sources, |c| grid.index(c), grid.obstacles(), &shape)?;
     let values = dijkstra(grid.len(), &src, |i, push| {
         for (c, len) in grid.neighbours(grid.cell(i), nb) {
             let w = if len > 1.0 { diagonal_cost as f64 } else { 1.0 };
@@ -146,7 +134,7 @@ pub fn dijkstra2(
 /// As [`dijkstra2`].
 pub fn bfs2(grid: &Grid2, sources: &[Cell2], nb: Neighbourhood2) -> Result<Field2> {
     let shape = format!("{}x{}", grid.rows(), grid.cols());
-    let src = check_sources(sources, |c| grid.index(c), grid.obstacles(), &shape)?;
+    let src = source_indices(sources, |c| grid.index(c), grid.obstacles(), &shape)?;
     let values = bfs(grid.len(), &src, |i, push| {
         for (c, _) in grid.neighbours(grid.cell(i), nb) {
             push(c.row * grid.cols() + c.col);
@@ -162,7 +150,7 @@ pub fn bfs2(grid: &Grid2, sources: &[Cell2], nb: Neighbourhood2) -> Result<Field
 /// As [`dijkstra2`].
 pub fn dijkstra3(grid: &Grid3, sources: &[Cell3], nb: Neighbourhood3) -> Result<Field3> {
     let [a, b, c] = grid.shape();
-    let src = check_sources(
+    let src = source_indices(
         sources,
         |c| grid.index(c),
         grid.obstacles(),
@@ -182,7 +170,7 @@ pub fn dijkstra3(grid: &Grid3, sources: &[Cell3], nb: Neighbourhood3) -> Result<
 /// As [`dijkstra2`].
 pub fn bfs3(grid: &Grid3, sources: &[Cell3], nb: Neighbourhood3) -> Result<Field3> {
     let [a, b, c] = grid.shape();
-    let src = check_sources(
+    let src = source_indices(
         sources,
         |c| grid.index(c),
         grid.obstacles(),

@@ -34,6 +34,7 @@ mod fmm;
 mod graph;
 mod heap;
 mod march;
+mod sources;
 
 pub use error::{EikonalError, Result};
 pub use fmm::{FastMarching, Order, SolveOptions2, SolveOptions3};
