@@ -41,24 +41,9 @@ pub fn scatter_squares2(
     seed: u64,
     keep_free: &[crate::Cell2],
 ) -> Result<Grid2> {
-    check_args(fraction, max_side)?;
-    let mut g = Grid2::new(rows, cols)?;
-    let mut rng = SplitMix64::new(seed);
-    let target = (fraction * g.len() as f64).ceil() as usize;
-    let mut mask = vec![false; g.len()];
-    let mut filled = 0;
-    while filled < target {
-        let side = 1 + rng.below(max_side);
-        let (r0, c0) = (rng.below(rows), rng.below(cols));
-        for r in r0..(r0 + side).min(rows) {
-            for c in c0..(c0 + side).min(cols) {
-                let i = r * cols + c;
-                filled += usize::from(!mask[i]);
-                mask[i] = true;
-            }
-        }
-    }
-    g = Grid2::from_obstacles(rows, cols, mask)?;
+    Grid2::new(rows, cols)?;
+    let mask = scatter_boxes([rows, cols], fraction, max_side, seed)?;
+    let mut g = Grid2::from_obstacles(rows, cols, mask)?;
     for &c in keep_free {
         g.set_obstacle(c, false)?;
     }
@@ -76,34 +61,51 @@ pub fn scatter_cubes3(
     seed: u64,
     keep_free: &[crate::Cell3],
 ) -> Result<Grid3> {
-    check_args(fraction, max_side)?;
-    let g = Grid3::new(shape[0], shape[1], shape[2])?;
-    let mut rng = SplitMix64::new(seed);
-    let target = (fraction * g.len() as f64).ceil() as usize;
-    let mut mask = vec![false; g.len()];
-    let mut filled = 0;
-    while filled < target {
-        let side = 1 + rng.below(max_side);
-        let o = [
-            rng.below(shape[0]),
-            rng.below(shape[1]),
-            rng.below(shape[2]),
-        ];
-        for x in o[0]..(o[0] + side).min(shape[0]) {
-            for y in o[1]..(o[1] + side).min(shape[1]) {
-                for z in o[2]..(o[2] + side).min(shape[2]) {
-                    let i = (x * shape[1] + y) * shape[2] + z;
-                    filled += usize::from(!mask[i]);
-                    mask[i] = true;
-                }
-            }
-        }
-    }
+    Grid3::new(shape[0], shape[1], shape[2])?;
+    let mask = scatter_boxes(shape, fraction, max_side, seed)?;
     let mut g = Grid3::from_obstacles(shape, mask)?;
     for &c in keep_free {
         g.set_obstacle(c, false)?;
     }
     Ok(g)
+}
+
+/// A C-order mask of `shape` with random axis-aligned boxes of equal sides (1..=`max_side`,
+/// clipped at the border) set until at least `fraction` of the cells are set. Each box draws
+/// its side, then its corner one axis at a time.
+fn scatter_boxes<const N: usize>(
+    shape: [usize; N],
+    fraction: f64,
+    max_side: usize,
+    seed: u64,
+) -> Result<Vec<bool>> {
+    check_args(fraction, max_side)?;
+    let len: usize = shape.iter().product();
+    let mut rng = SplitMix64::new(seed);
+    let target = (fraction * len as f64).ceil() as usize;
+    let mut mask = vec![false; len];
+    let mut filled = 0;
+    while filled < target {
+        let side = 1 + rng.below(max_side);
+        let corner = shape.map(|d| rng.below(d));
+        let extent: [usize; N] = std::array::from_fn(|k| side.min(shape[k] - corner[k]));
+        // Visit the box with an odometer over its offsets.
+        let mut off = [0usize; N];
+        'boxes: loop {
+            let i = (0..N).fold(0, |acc, k| acc * shape[k] + corner[k] + off[k]);
+            filled += usize::from(!mask[i]);
+            mask[i] = true;
+            for k in (0..N).rev() {
+                off[k] += 1;
+                if off[k] < extent[k] {
+                    continue 'boxes;
+                }
+                off[k] = 0;
+            }
+            break;
+        }
+    }
+    Ok(mask)
 }
 
 fn check_args(fraction: f64, max_side: usize) -> Result<()> {
