@@ -5,6 +5,7 @@
 //! - [`grid`]: grids, fields, move rules, the maze text format, PNG/.npy I/O, `FieldModel`.
 //! - [`eikonal`]: fast marching (2D/3D, first/second order) and exact graph distances.
 //! - [`mazes`]: maze generators, datasets of target fields, evaluation pairs.
+//! - [`nets`]: implicit field networks (plain, goal, context-aligned, hypernetwork) and training.
 //! - [`plan`]: planners (field descent, gradient descent, A*) and the evaluation harness.
 //!
 //! ```
@@ -20,4 +21,5 @@
 pub use envfield_eikonal as eikonal;
 pub use envfield_grid as grid;
 pub use envfield_mazes as mazes;
+pub use envfield_nets as nets;
 pub use envfield_plan as plan;

@@ -1,0 +1,255 @@
+//! Named parameters with seeded initialisation, the AdamW optimiser, and the safetensors
+//! checkpoint format.
+
+use crate::{NetsError, Result};
+use candle_core::{Device, Tensor, Var};
+use envfield_grid::synth::SplitMix64;
+use safetensors::tensor::{Dtype, SafeTensors, TensorView};
+use std::collections::HashMap;
+use std::path::Path;
+
+/// How a parameter starts.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Init {
+    /// All zeros.
+    Zeros,
+    /// Normal with mean 0 and this standard deviation.
+    Normal(f32),
+    /// Uniform in `[-bound, bound]`.
+    Uniform(f32),
+}
+
+/// The trainable tensors of a network, in creation order, each with a unique name.
+/// Initialisation draws from a seeded [`SplitMix64`], so a config and a seed give the same
+/// network on every machine.
+#[derive(Debug)]
+pub(crate) struct ParamStore {
+    names: Vec<String>,
+    vars: Vec<Var>,
+    rng: SplitMix64,
+    device: Device,
+}
+
+fn unit(rng: &mut SplitMix64) -> f64 {
+    ((rng.next_u64() >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+}
+
+impl ParamStore {
+    pub(crate) fn new(seed: u64, device: &Device) -> Self {
+        Self {
+            names: Vec::new(),
+            vars: Vec::new(),
+            rng: SplitMix64::new(seed ^ 0xE17F_1E1D),
+            device: device.clone(),
+        }
+    }
+
+    /// Creates the parameter `name` of `shape` and returns its tensor (which tracks gradients).
+    pub(crate) fn add(&mut self, name: String, shape: &[usize], init: Init) -> Result<Tensor> {
+        debug_assert!(!self.names.contains(&name), "duplicate parameter {name}");
+        let n: usize = shape.iter().product();
+        let data: Vec<f32> = match init {
+            Init::Zeros => vec![0.0; n],
+            Init::Uniform(b) => (0..n)
+                .map(|_| ((2.0 * unit(&mut self.rng) - 1.0) * b as f64) as f32)
+                .collect(),
+            Init::Normal(std) => (0..n)
+                .map(|_| {
+                    let (u1, u2) = (unit(&mut self.rng), unit(&mut self.rng));
+                    let z = (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos();
+                    (z * std as f64) as f32
+                })
+                .collect(),
+        };
+        let var = Var::from_tensor(&Tensor::from_vec(data, shape, &self.device)?)?;
+        let t = var.as_tensor().clone();
+        self.names.push(name);
+        self.vars.push(var);
+        Ok(t)
+    }
+
+    pub(crate) fn vars(&self) -> &[Var] {
+        &self.vars
+    }
+
+    pub(crate) fn names(&self) -> &[String] {
+        &self.names
+    }
+
+    /// Total number of scalars.
+    pub(crate) fn count(&self) -> usize {
+        self.vars.iter().map(|v| v.elem_count()).sum()
+    }
+}
+
+/// AdamW (decoupled weight decay) with bias correction; its moments travel in checkpoints so
+/// training resumes exactly where it stopped.
+#[derive(Debug)]
+pub(crate) struct AdamW {
+    pub(crate) lr: f64,
+    beta1: f64,
+    beta2: f64,
+    eps: f64,
+    weight_decay: f64,
+    pub(crate) step: u64,
+    m: Vec<Tensor>,
+    v: Vec<Tensor>,
+}
+
+impl AdamW {
+    pub(crate) fn new(vars: &[Var], lr: f64, betas: (f64, f64), eps: f64, wd: f64) -> Result<Self> {
+        let zeros = |v: &Var| v.zeros_like();
+        Ok(Self {
+            lr,
+            beta1: betas.0,
+            beta2: betas.1,
+            eps,
+            weight_decay: wd,
+            step: 0,
+            m: vars.iter().map(zeros).collect::<candle_core::Result<_>>()?,
+            v: vars.iter().map(zeros).collect::<candle_core::Result<_>>()?,
+        })
+    }
+
+    /// One update from the gradients of `loss`.
+    pub(crate) fn backward_step(&mut self, vars: &[Var], loss: &Tensor) -> Result<()> {
+        let grads = loss.backward()?;
+        self.step += 1;
+        let t = self.step as i32;
+        let c1 = 1.0 - self.beta1.powi(t);
+        let c2 = 1.0 - self.beta2.powi(t);
+        let step_size = self.lr / c1;
+        for (i, var) in vars.iter().enumerate() {
+            let Some(g) = grads.get(var.as_tensor()) else {
+                continue;
+            };
+            let m = ((&self.m[i] * self.beta1)? + (g * (1.0 - self.beta1))?)?;
+            let v = ((&self.v[i] * self.beta2)? + (g.sqr()? * (1.0 - self.beta2))?)?;
+            let denom = ((&v / c2)?.sqrt()? + self.eps)?;
+            let mut theta = var.as_tensor().clone();
+            if self.weight_decay > 0.0 {
+                theta = (theta * (1.0 - self.lr * self.weight_decay))?;
+            }
+            let update = ((&m / denom)? * step_size)?;
+            var.set(&(theta - update)?)?;
+            self.m[i] = m;
+            self.v[i] = v;
+        }
+        Ok(())
+    }
+
+    pub(crate) fn moments(&self) -> (&[Tensor], &[Tensor]) {
+        (&self.m, &self.v)
+    }
+
+    pub(crate) fn set_moments(&mut self, m: Vec<Tensor>, v: Vec<Tensor>, step: u64) {
+        self.m = m;
+        self.v = v;
+        self.step = step;
+    }
+}
+
+/// Metadata keys of an envfield-nets safetensors file.
+pub(crate) const META_FORMAT: &str = "envfield.format";
+pub(crate) const FORMAT: &str = "envfield-nets/1";
+pub(crate) const META_CONFIG: &str = "envfield.model";
+
+/// Serialises named f32 tensors and metadata into safetensors bytes.
+pub(crate) fn to_safetensors(
+    tensors: &[(String, Tensor)],
+    metadata: HashMap<String, String>,
+) -> Result<Vec<u8>> {
+    let mut bytes: Vec<(String, Vec<usize>, Vec<u8>)> = Vec::with_capacity(tensors.len());
+    for (name, t) in tensors {
+        let data = t.flatten_all()?.to_vec1::<f32>()?;
+        let raw: Vec<u8> = data.iter().flat_map(|x| x.to_le_bytes()).collect();
+        bytes.push((name.clone(), t.dims().to_vec(), raw));
+    }
+    let mut views = Vec::with_capacity(bytes.len());
+    for (name, shape, raw) in &bytes {
+        let view = TensorView::new(Dtype::F32, shape.clone(), raw)
+            .map_err(|e| NetsError::InvalidInput(format!("cannot serialise tensor {name}: {e}")))?;
+        views.push((name.clone(), view));
+    }
+    safetensors::tensor::serialize(views, Some(metadata))
+        .map_err(|e| NetsError::InvalidInput(format!("cannot serialise tensors: {e}")))
+}
+
+/// A safetensors file read into memory: its metadata and its f32 tensors by name.
+pub(crate) struct TensorFile {
+    pub(crate) metadata: HashMap<String, String>,
+    pub(crate) tensors: HashMap<String, (Vec<usize>, Vec<f32>)>,
+}
+
+impl TensorFile {
+    pub(crate) fn read(path: &Path) -> Result<Self> {
+        let bad = |reason: String| NetsError::Checkpoint {
+            path: path.to_path_buf(),
+            reason,
+        };
+        let bytes = std::fs::read(path).map_err(|e| bad(format!("cannot read: {e}")))?;
+        let (_, meta) = SafeTensors::read_metadata(&bytes)
+            .map_err(|e| bad(format!("not a safetensors file or truncated ({e})")))?;
+        let st = SafeTensors::deserialize(&bytes)
+            .map_err(|e| bad(format!("not a safetensors file or truncated ({e})")))?;
+        let metadata = meta.metadata().clone().unwrap_or_default();
+        match metadata.get(META_FORMAT) {
+            Some(f) if f == FORMAT => {}
+            Some(f) => return Err(bad(format!("format `{f}`, expected `{FORMAT}`"))),
+            None => {
+                return Err(bad(format!(
+                    "no `{META_FORMAT}` metadata (not written by envfield-nets)"
+                )))
+            }
+        }
+        let mut tensors = HashMap::new();
+        for (name, view) in st.tensors() {
+            if view.dtype() != Dtype::F32 {
+                return Err(bad(format!(
+                    "tensor `{name}` is {:?}, expected F32",
+                    view.dtype()
+                )));
+            }
+            let data = view
+                .data()
+                .chunks_exact(4)
+                .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+                .collect();
+            tensors.insert(name, (view.shape().to_vec(), data));
+        }
+        Ok(Self { metadata, tensors })
+    }
+
+    /// Takes tensor `name`, checking its shape.
+    pub(crate) fn take(
+        &mut self,
+        path: &Path,
+        name: &str,
+        shape: &[usize],
+        device: &Device,
+    ) -> Result<Tensor> {
+        let (found, data) = self
+            .tensors
+            .remove(name)
+            .ok_or_else(|| NetsError::MissingWeight {
+                path: path.to_path_buf(),
+                name: name.to_string(),
+            })?;
+        if found != shape {
+            return Err(NetsError::ShapeMismatch {
+                path: path.to_path_buf(),
+                name: name.to_string(),
+                expected: shape.to_vec(),
+                found,
+            });
+        }
+        if let Some(i) = data.iter().position(|x: &f32| !x.is_finite()) {
+            return Err(NetsError::Checkpoint {
+                path: path.to_path_buf(),
+                reason: format!("tensor `{name}` holds a non-finite value at flat index {i}"),
+            });
+        }
+        let t = Tensor::from_vec(data, shape, device)?;
+        Ok(t)
+    }
+}

@@ -1,0 +1,485 @@
+//! Training: L1 on the paper's target encoding, AdamW, seeded batches, atomic checkpoints that
+//! resume exactly.
+
+use crate::model::{read_config, Batch, FieldNet, TargetEncoding, OPTIMISER_PREFIX};
+use crate::params::{AdamW, TensorFile};
+use crate::{NetsError, Result};
+use candle_core::{Device, Tensor};
+use envfield_grid::synth::SplitMix64;
+use envfield_mazes::{Dataset, Sample};
+use serde::{Deserialize, Serialize};
+use std::collections::HashMap;
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+const META_STEP: &str = "envfield.step";
+const META_TRAIN: &str = "envfield.train";
+
+/// How to train. Serialised into every checkpoint.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct TrainConfig {
+    /// Peak learning rate (the paper: 5e-5).
+    pub lr: f64,
+    /// The learning rate decays along a cosine to `lr * final_lr_fraction` at `steps`
+    /// (1 keeps it constant).
+    pub final_lr_fraction: f64,
+    /// Adam's betas.
+    pub betas: (f64, f64),
+    /// Adam's epsilon.
+    pub eps: f64,
+    /// Decoupled weight decay (AdamW); 0 is Adam.
+    pub weight_decay: f64,
+    /// (maze, goal) samples per step.
+    pub batch_items: usize,
+    /// Query cells per sample per step (drawn uniformly, obstacles included: the network
+    /// learns the blocked value too).
+    pub queries_per_item: usize,
+    /// Total steps.
+    pub steps: u64,
+    /// Seed of the batch sampler (the network's seed is separate).
+    pub seed: u64,
+    /// Save a checkpoint every this many steps (0: only at the end).
+    pub checkpoint_every: u64,
+    /// Validate every this many steps (0: only at the end).
+    pub validate_every: u64,
+    /// At most this many validation samples are used.
+    pub validation_samples: usize,
+}
+
+impl Default for TrainConfig {
+    fn default() -> Self {
+        Self {
+            lr: 5e-5,
+            final_lr_fraction: 1.0,
+            betas: (0.9, 0.999),
+            eps: 1e-8,
+            weight_decay: 0.0,
+            batch_items: 32,
+            queries_per_item: 256,
+            steps: 10_000,
+            seed: 0,
+            checkpoint_every: 500,
+            validate_every: 500,
+            validation_samples: 256,
+        }
+    }
+}
+
+impl TrainConfig {
+    /// Checks every setting.
+    ///
+    /// # Errors
+    /// [`NetsError::InvalidConfig`] naming the setting.
+    pub fn validate(&self) -> Result<()> {
+        let ok = self.lr.is_finite()
+            && self.lr > 0.0
+            && (0.0..=1.0).contains(&self.final_lr_fraction)
+            && (0.0..1.0).contains(&self.betas.0)
+            && (0.0..1.0).contains(&self.betas.1)
+            && self.eps > 0.0
+            && self.weight_decay >= 0.0
+            && self.batch_items > 0
+            && self.queries_per_item > 0
+            && self.validation_samples > 0;
+        if ok {
+            Ok(())
+        } else {
+            Err(NetsError::InvalidConfig(format!(
+                "training: need lr > 0, final_lr_fraction in [0, 1], betas in [0, 1), eps > 0, \
+                 weight_decay >= 0, batch_items, queries_per_item and validation_samples >= 1 (got {self:?})"
+            )))
+        }
+    }
+
+    /// The learning rate at `step` (0-based).
+    pub fn lr_at(&self, step: u64) -> f64 {
+        let low = self.lr * self.final_lr_fraction;
+        let t = (step as f64 / self.steps.max(1) as f64).min(1.0);
+        low + 0.5 * (self.lr - low) * (1.0 + (std::f64::consts::PI * t).cos())
+    }
+}
+
+/// What the trainer reports after each step.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Progress {
+    /// Steps done (this one included).
+    pub step: u64,
+    /// Total steps.
+    pub steps: u64,
+    /// This step's training loss (mean absolute error of the encoded target).
+    pub loss: f32,
+    /// The validation loss, on steps where it was measured.
+    pub validation: Option<f32>,
+    /// Whether a checkpoint was written after this step.
+    pub checkpointed: bool,
+    /// Wall time since this run started (a resumed run starts at zero).
+    pub elapsed: Duration,
+    /// Steps per second over this run so far.
+    pub steps_per_second: f64,
+}
+
+/// What a finished run measured.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct TrainSummary {
+    /// Steps done in total (across resumes).
+    pub step: u64,
+    /// Mean training loss over the last 100 steps of this run.
+    pub loss: f32,
+    /// The final validation loss, when there was a validation set.
+    pub validation: Option<f32>,
+    /// Seconds this run took.
+    pub seconds: f64,
+    /// Steps per second in this run.
+    pub steps_per_second: f64,
+    /// Training samples (maze-goal pairs) per second.
+    pub items_per_second: f64,
+    /// Query points per second.
+    pub queries_per_second: f64,
+}
+
+/// Trains a [`FieldNet`] on [`Dataset`]s.
+#[derive(Debug)]
+pub struct Trainer {
+    net: FieldNet,
+    optimiser: AdamW,
+    config: TrainConfig,
+}
+
+impl Trainer {
+    /// A trainer for `net` at step 0.
+    ///
+    /// # Errors
+    /// [`NetsError::InvalidConfig`] for a bad config.
+    pub fn new(net: FieldNet, config: TrainConfig) -> Result<Self> {
+        config.validate()?;
+        let optimiser = AdamW::new(
+            net.vars(),
+            config.lr,
+            config.betas,
+            config.eps,
+            config.weight_decay,
+        )?;
+        Ok(Self {
+            net,
+            optimiser,
+            config,
+        })
+    }
+
+    /// Resumes from a checkpoint written by [`Trainer::save_checkpoint`]: the network, the
+    /// optimiser's moments, the step and the training config.
+    ///
+    /// # Errors
+    /// [`NetsError::Checkpoint`] and the weight errors of [`FieldNet::load_weights`].
+    pub fn resume(path: impl AsRef<Path>) -> Result<Self> {
+        Self::resume_on(path, &Device::Cpu)
+    }
+
+    /// As [`Trainer::resume`] on `device`.
+    ///
+    /// # Errors
+    /// As [`Trainer::resume`].
+    pub fn resume_on(path: impl AsRef<Path>, device: &Device) -> Result<Self> {
+        let path = path.as_ref();
+        let mut file = TensorFile::read(path)?;
+        let bad = |reason: String| NetsError::Checkpoint {
+            path: path.to_path_buf(),
+            reason,
+        };
+        let step: u64 = file
+            .metadata
+            .get(META_STEP)
+            .ok_or_else(|| {
+                bad(format!(
+                    "no `{META_STEP}`: a weight file, not a training checkpoint"
+                ))
+            })?
+            .parse()
+            .map_err(|e| bad(format!("bad step: {e}")))?;
+        let config: TrainConfig = serde_json::from_str(
+            file.metadata
+                .get(META_TRAIN)
+                .ok_or_else(|| bad(format!("no `{META_TRAIN}` metadata")))?,
+        )
+        .map_err(|e| bad(format!("bad training config: {e}")))?;
+        let model = read_config(path, &file)?;
+        let mut net = FieldNet::new_on(model, 0, device)?;
+        let mut m = Vec::new();
+        let mut v = Vec::new();
+        for (name, var) in net.param_names().iter().zip(net.vars()) {
+            m.push(file.take(
+                path,
+                &format!("{OPTIMISER_PREFIX}m.{name}"),
+                var.dims(),
+                device,
+            )?);
+            v.push(file.take(
+                path,
+                &format!("{OPTIMISER_PREFIX}v.{name}"),
+                var.dims(),
+                device,
+            )?);
+        }
+        net.take_weights(path, &mut file)?;
+        let mut trainer = Self::new(net, config)?;
+        trainer.optimiser.set_moments(m, v, step);
+        Ok(trainer)
+    }
+
+    /// Steps done so far.
+    pub fn step(&self) -> u64 {
+        self.optimiser.step
+    }
+
+    /// The network.
+    pub fn net(&self) -> &FieldNet {
+        &self.net
+    }
+
+    /// The network, consuming the trainer.
+    pub fn into_net(self) -> FieldNet {
+        self.net
+    }
+
+    /// The training config.
+    pub fn config(&self) -> &TrainConfig {
+        &self.config
+    }
+
+    /// Sets the total number of steps (to train a resumed run further).
+    pub fn set_steps(&mut self, steps: u64) {
+        self.config.steps = steps;
+    }
+
+    /// Writes a checkpoint (weights, config, optimiser moments, step, training config) to
+    /// `path` atomically: a reader sees the old file or the new one, never a partial one.
+    ///
+    /// # Errors
+    /// I/O errors naming the file.
+    pub fn save_checkpoint(&self, path: impl AsRef<Path>) -> Result<()> {
+        let (m, v) = self.optimiser.moments();
+        let mut extra = Vec::with_capacity(2 * m.len());
+        for (i, name) in self.net.param_names().iter().enumerate() {
+            extra.push((format!("{OPTIMISER_PREFIX}m.{name}"), m[i].clone()));
+            extra.push((format!("{OPTIMISER_PREFIX}v.{name}"), v[i].clone()));
+        }
+        let mut meta = HashMap::new();
+        meta.insert(META_STEP.to_string(), self.step().to_string());
+        let train = serde_json::to_string(&self.config).map_err(|e| {
+            NetsError::InvalidConfig(format!("cannot serialise the training config: {e}"))
+        })?;
+        meta.insert(META_TRAIN.to_string(), train);
+        self.net.write_file(path.as_ref(), extra, meta)
+    }
+
+    /// One optimiser step on `batch` with `targets` (one encoded target per query); returns
+    /// the loss before the step.
+    ///
+    /// # Errors
+    /// [`NetsError::InvalidInput`] for mismatched targets; [`NetsError::Diverged`] for a loss
+    /// that is not finite.
+    pub fn train_batch(&mut self, batch: &Batch, targets: &[f32]) -> Result<f32> {
+        if targets.len() != batch.len() {
+            return Err(NetsError::InvalidInput(format!(
+                "{} targets for {} queries",
+                targets.len(),
+                batch.len()
+            )));
+        }
+        let pred = self.net.forward(batch)?;
+        let target = Tensor::from_vec(targets.to_vec(), targets.len(), self.net.device())?;
+        let loss = (pred - target)?.abs()?.mean_all()?;
+        let value = loss.to_scalar::<f32>()?;
+        if !value.is_finite() {
+            return Err(NetsError::Diverged {
+                step: self.step(),
+                loss: value,
+            });
+        }
+        self.optimiser.lr = self.config.lr_at(self.step());
+        self.optimiser.backward_step(self.net.vars(), &loss)?;
+        Ok(value)
+    }
+
+    /// The training batch of step `step` from `data`: seeded by the config's seed and the step,
+    /// so a resumed run draws the same batches as an uninterrupted one.
+    fn sample_batch(&self, data: &Dataset, step: u64) -> Result<(Batch, Vec<f32>)> {
+        let mut rng = SplitMix64::new(
+            self.config
+                .seed
+                .wrapping_mul(0x9E37_79B9)
+                .wrapping_add(step),
+        );
+        let (b, q) = (self.config.batch_items, self.config.queries_per_item);
+        let first = &data.samples[0];
+        let (rows, cols) = (first.grid.rows(), first.grid.cols());
+        let reads_grid = self.net.config().reads_grid();
+        let encoding = self.net.config().encoding();
+        let mut batch = Batch {
+            extent: vec![rows, cols],
+            items: b,
+            obstacles: Vec::with_capacity(if reads_grid { b * rows * cols } else { 0 }),
+            goals: Vec::with_capacity(2 * b),
+            per_item: q,
+            queries: Vec::with_capacity(2 * b * q),
+        };
+        let mut targets = Vec::with_capacity(b * q);
+        for _ in 0..b {
+            let s = &data.samples[rng.below(data.samples.len())];
+            if reads_grid {
+                batch
+                    .obstacles
+                    .extend(s.grid.obstacles().iter().map(|&o| o as u8 as f32));
+            }
+            batch.goals.extend([s.goal.row as f32, s.goal.col as f32]);
+            for _ in 0..q {
+                let i = rng.below(rows * cols);
+                batch.queries.extend([(i / cols) as f32, (i % cols) as f32]);
+                targets.push(reencode(encoding, s.target[i]));
+            }
+        }
+        Ok((batch, targets))
+    }
+
+    /// Mean absolute error of the encoded target over every cell of (up to
+    /// `validation_samples`) samples of `data`.
+    ///
+    /// # Errors
+    /// As [`FieldNet::forward`].
+    pub fn validate(&self, data: &Dataset) -> Result<f32> {
+        validation_loss(&self.net, data, self.config.validation_samples)
+    }
+
+    /// Trains until `config.steps` (from the current step), drawing each step's batch from
+    /// `datasets[step % datasets.len()]` (one dataset per maze size trains one model for all
+    /// sizes), validating on `validation`, checkpointing to `checkpoint`, and calling
+    /// `on_progress` after every step. Returning `false` from it stops early (with a
+    /// checkpoint).
+    ///
+    /// # Errors
+    /// [`NetsError::InvalidInput`] for an empty or mixed-size dataset; training errors.
+    pub fn run(
+        &mut self,
+        datasets: &[Dataset],
+        validation: Option<&Dataset>,
+        checkpoint: Option<&Path>,
+        mut on_progress: impl FnMut(&Progress) -> bool,
+    ) -> Result<TrainSummary> {
+        if datasets.is_empty() {
+            return Err(NetsError::InvalidInput("no training dataset".into()));
+        }
+        for (k, d) in datasets.iter().chain(validation).enumerate() {
+            check_single_size(d, k)?;
+        }
+        let start = Instant::now();
+        let first = self.step();
+        let mut recent: Vec<f32> = Vec::new();
+        let mut last_validation = None;
+        while self.step() < self.config.steps {
+            let step = self.step();
+            let data = &datasets[(step % datasets.len() as u64) as usize];
+            let (batch, targets) = self.sample_batch(data, step)?;
+            let loss = self.train_batch(&batch, &targets)?;
+            recent.push(loss);
+            if recent.len() > 100 {
+                recent.remove(0);
+            }
+            let done = self.step();
+            let finished = done >= self.config.steps;
+            let every = |n: u64| n > 0 && done % n == 0;
+            let validation_now = match validation {
+                Some(v) if finished || every(self.config.validate_every) => Some(self.validate(v)?),
+                _ => None,
+            };
+            if validation_now.is_some() {
+                last_validation = validation_now;
+            }
+            let checkpointed = match checkpoint {
+                Some(p) if finished || every(self.config.checkpoint_every) => {
+                    self.save_checkpoint(p)?;
+                    true
+                }
+                _ => false,
+            };
+            let elapsed = start.elapsed();
+            let progress = Progress {
+                step: done,
+                steps: self.config.steps,
+                loss,
+                validation: validation_now,
+                checkpointed,
+                elapsed,
+                steps_per_second: (done - first) as f64 / elapsed.as_secs_f64().max(1e-9),
+            };
+            if !on_progress(&progress) {
+                if let (Some(p), false) = (checkpoint, checkpointed) {
+                    self.save_checkpoint(p)?;
+                }
+                break;
+            }
+        }
+        let seconds = start.elapsed().as_secs_f64();
+        let steps = (self.step() - first) as f64;
+        let rate = steps / seconds.max(1e-9);
+        Ok(TrainSummary {
+            step: self.step(),
+            loss: recent.iter().sum::<f32>() / recent.len().max(1) as f32,
+            validation: last_validation,
+            seconds,
+            steps_per_second: rate,
+            items_per_second: rate * self.config.batch_items as f64,
+            queries_per_second: rate
+                * (self.config.batch_items * self.config.queries_per_item) as f64,
+        })
+    }
+}
+
+/// Dataset targets are in the paper's encoding; the network may use another.
+fn reencode(encoding: TargetEncoding, paper: f32) -> f32 {
+    match encoding {
+        TargetEncoding::Reciprocal => paper,
+        other => other.encode(envfield_mazes::decode_target(paper)),
+    }
+}
+
+fn check_single_size(data: &Dataset, k: usize) -> Result<()> {
+    let first: &Sample = data
+        .samples
+        .first()
+        .ok_or_else(|| NetsError::InvalidInput(format!("dataset {k} is empty")))?;
+    let shape = (first.grid.rows(), first.grid.cols());
+    if let Some(s) = data
+        .samples
+        .iter()
+        .find(|s| (s.grid.rows(), s.grid.cols()) != shape)
+    {
+        return Err(NetsError::InvalidInput(format!(
+            "dataset {k} mixes grid sizes {:?} and {:?} (give one dataset per size)",
+            shape,
+            (s.grid.rows(), s.grid.cols())
+        )));
+    }
+    Ok(())
+}
+
+/// Mean absolute error of `net`'s encoded output (in its own [`TargetEncoding`]) over every
+/// cell of up to `limit` samples.
+///
+/// # Errors
+/// As [`FieldNet::forward`].
+pub fn validation_loss(net: &FieldNet, data: &Dataset, limit: usize) -> Result<f32> {
+    let mut total = 0f64;
+    let mut count = 0usize;
+    let encoding = net.config().encoding();
+    for s in data.samples.iter().take(limit) {
+        let pred = net.predict_encoded(&Batch::whole_grid(&s.grid, s.goal))?;
+        total += pred
+            .iter()
+            .zip(&s.target)
+            .map(|(p, &t)| (p - reencode(encoding, t)).abs() as f64)
+            .sum::<f64>();
+        count += pred.len();
+    }
+    Ok((total / count.max(1) as f64) as f32)
+}

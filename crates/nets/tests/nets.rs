@@ -1,0 +1,362 @@
+//! Behaviour of the networks: fitting, saving and loading, bad files, input gradients,
+//! resuming training.
+
+use envfield_grid::{Cell2, FieldModel, Grid2, MoveRule, Point2};
+use envfield_mazes::{Dataset, DatasetConfig, GeneratorKind, MazeGenerator, TargetKind};
+use envfield_nets::{
+    Activation, Batch, ContextConfig, ConvSpec, FieldNet, GoalConfig, HyperConfig, MlpConfig,
+    ModelConfig, NetsError, PlainConfig, TargetEncoding, TrainConfig, Trainer,
+};
+use envfield_plan::{FieldDescent, Planner};
+
+fn tmp(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("envfield-nets-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+fn small_context() -> ContextConfig {
+    ContextConfig {
+        encoder: vec![ConvSpec::new(8, 1), ConvSpec::new(8, 2)],
+        mlp: MlpConfig {
+            hidden: 16,
+            layers: 2,
+            ..MlpConfig::default()
+        },
+        ..ContextConfig::default()
+    }
+}
+
+fn small_hyper() -> HyperConfig {
+    HyperConfig {
+        encoder: vec![
+            ConvSpec {
+                channels: 8,
+                dilation: 1,
+                stride: 2,
+            },
+            ConvSpec {
+                channels: 8,
+                dilation: 1,
+                stride: 2,
+            },
+        ],
+        fc: vec![16],
+        hypo_hidden: 8,
+        hypo_layers: 2,
+        ..HyperConfig::default()
+    }
+}
+
+fn dataset(size: usize, mazes: usize, goals: usize, seed: u64) -> Dataset {
+    Dataset::generate(&DatasetConfig {
+        generator: MazeGenerator::new(GeneratorKind::Gridworld, size).unwrap(),
+        mazes,
+        goals_per_maze: goals,
+        target: TargetKind::Graph(MoveRule::Strict),
+        extra_obstacles: 0.0,
+        seed,
+    })
+    .unwrap()
+}
+
+/// The plain field learns one 8x8 maze and goal well enough that descent on it reaches the
+/// goal from every free cell connected to it.
+#[test]
+fn plain_field_fits_one_maze_for_descent_from_every_cell() {
+    let data = dataset(8, 1, 1, 3);
+    let s = &data.samples[0];
+    let net = FieldNet::new(
+        ModelConfig::Plain(PlainConfig {
+            extent: vec![8, 8],
+            goal: vec![s.goal.row, s.goal.col],
+            mlp: MlpConfig {
+                hidden: 64,
+                layers: 3,
+                fourier: 3,
+                ..MlpConfig::default()
+            },
+            encoding: TargetEncoding::Reciprocal,
+        }),
+        1,
+    )
+    .unwrap();
+    let cfg = TrainConfig {
+        lr: 3e-3,
+        final_lr_fraction: 0.05,
+        batch_items: 1,
+        queries_per_item: 64,
+        steps: 1500,
+        validate_every: 0,
+        checkpoint_every: 0,
+        ..TrainConfig::default()
+    };
+    let mut trainer = Trainer::new(net, cfg).unwrap();
+    let summary = trainer
+        .run(std::slice::from_ref(&data), Some(&data), None, |_| true)
+        .unwrap();
+    assert!(
+        summary.validation.unwrap() < 0.01,
+        "L1 {:?}",
+        summary.validation
+    );
+    let net = trainer.into_net();
+    let planner = FieldDescent::new(&net, MoveRule::Strict);
+    let mut starts = 0;
+    for start in s.grid.free_cells() {
+        let i = s.grid.index(start).unwrap();
+        if start == s.goal || s.target[i] <= 0.0 {
+            continue;
+        }
+        starts += 1;
+        let out = planner.plan(&s.grid, start, s.goal, 200).unwrap();
+        assert!(out.success, "descent from {start:?} failed: {:?}", out.path);
+    }
+    assert!(starts > 20, "only {starts} starts");
+}
+
+fn all_configs() -> Vec<ModelConfig> {
+    vec![
+        ModelConfig::Plain(PlainConfig {
+            extent: vec![6, 7],
+            goal: vec![1, 2],
+            mlp: MlpConfig {
+                hidden: 8,
+                layers: 2,
+                fourier: 2,
+                ..MlpConfig::default()
+            },
+            encoding: TargetEncoding::Linear { scale: 20.0 },
+        }),
+        ModelConfig::Goal(GoalConfig {
+            extent: vec![6, 7],
+            mlp: MlpConfig {
+                hidden: 8,
+                layers: 2,
+                activation: Activation::Sine { omega0: 30.0 },
+                fourier: 0,
+            },
+            encoding: TargetEncoding::Reciprocal,
+        }),
+        ModelConfig::Context(small_context()),
+        ModelConfig::Hyper(small_hyper()),
+    ]
+}
+
+fn grid67() -> Grid2 {
+    let mut g = Grid2::new(6, 7).unwrap();
+    for c in [Cell2::new(2, 2), Cell2::new(2, 3), Cell2::new(4, 5)] {
+        g.set_obstacle(c, true).unwrap();
+    }
+    g
+}
+
+#[test]
+fn save_load_gives_identical_predictions_for_every_arch() {
+    let grid = grid67();
+    let goal = Cell2::new(1, 2);
+    for (k, cfg) in all_configs().into_iter().enumerate() {
+        let net = FieldNet::new(cfg.clone(), 5).unwrap();
+        let path = tmp(&format!("roundtrip{k}.safetensors"));
+        net.save(&path).unwrap();
+        let back = FieldNet::load(&path).unwrap();
+        assert_eq!(back.config(), &cfg);
+        let a = net.predict(&grid, goal).unwrap();
+        let b = back.predict(&grid, goal).unwrap();
+        assert_eq!(a.values(), b.values(), "{}", cfg.arch());
+        // A different seed gives a different network (the load really replaced the weights).
+        let other = FieldNet::new(cfg.clone(), 6).unwrap();
+        assert_ne!(
+            other.predict(&grid, goal).unwrap().values(),
+            a.values(),
+            "{}",
+            cfg.arch()
+        );
+    }
+}
+
+#[test]
+fn wrong_shape_truncated_and_foreign_files_are_errors() {
+    let net = FieldNet::new(ModelConfig::Context(small_context()), 1).unwrap();
+    let path = tmp("shape.safetensors");
+    net.save(&path).unwrap();
+    let mut wider_cfg = small_context();
+    wider_cfg.mlp.hidden = 32;
+    let mut wider = FieldNet::new(ModelConfig::Context(wider_cfg), 1).unwrap();
+    match wider.load_weights(&path) {
+        Err(NetsError::ShapeMismatch {
+            name,
+            expected,
+            found,
+            ..
+        }) => {
+            assert!(name.starts_with("mlp."), "{name}");
+            assert_ne!(expected, found);
+        }
+        other => panic!("expected a shape mismatch, got {other:?}"),
+    }
+    let hyper_path = tmp("hyper.safetensors");
+    FieldNet::new(ModelConfig::Hyper(small_hyper()), 1)
+        .unwrap()
+        .save(&hyper_path)
+        .unwrap();
+    let mut ctx = FieldNet::new(ModelConfig::Context(small_context()), 1).unwrap();
+    assert!(matches!(
+        ctx.load_weights(&hyper_path),
+        Err(NetsError::MissingWeight { .. } | NetsError::ShapeMismatch { .. })
+    ));
+
+    let bytes = std::fs::read(&path).unwrap();
+    let truncated = tmp("truncated.safetensors");
+    for cut in [bytes.len() / 2, 7, 0] {
+        std::fs::write(&truncated, &bytes[..cut]).unwrap();
+        let err = FieldNet::load(&truncated).unwrap_err();
+        assert!(matches!(err, NetsError::Checkpoint { .. }), "{err}");
+        assert!(err.to_string().contains("truncated.safetensors"), "{err}");
+    }
+    assert!(matches!(
+        FieldNet::load(tmp("missing.safetensors")),
+        Err(NetsError::Checkpoint { .. })
+    ));
+    // A weight file is not a training checkpoint.
+    assert!(matches!(
+        Trainer::resume(&path),
+        Err(NetsError::Checkpoint { .. })
+    ));
+}
+
+/// Reverse-mode gradients with respect to the query agree with central differences.
+#[test]
+fn input_gradient_matches_finite_differences() {
+    let grid = grid67();
+    let goal = Cell2::new(1, 2);
+    let points = [
+        Point2::new(0.3, 4.6),
+        Point2::new(3.4, 1.7),
+        Point2::new(4.55, 5.2),
+    ];
+    for cfg in all_configs().into_iter().skip(1) {
+        let net = FieldNet::new(cfg.clone(), 11).unwrap();
+        let batch = Batch::points(&grid, goal, &points);
+        let (_, grad) = net.predict_with_gradient(&batch).unwrap();
+        let h = 1e-2f32;
+        for (i, p) in points.iter().enumerate() {
+            for axis in 0..2 {
+                let shift = |s: f32| {
+                    let mut q = *p;
+                    if axis == 0 {
+                        q.row += s
+                    } else {
+                        q.col += s
+                    }
+                    net.predict_encoded(&Batch::points(&grid, goal, &[q]))
+                        .unwrap()[0]
+                };
+                let fd = (shift(h) - shift(-h)) / (2.0 * h);
+                let g = grad[2 * i + axis];
+                assert!(
+                    (fd - g).abs() <= 2e-3 + 0.05 * fd.abs().max(g.abs()),
+                    "{} point {i} axis {axis}: analytic {g}, finite difference {fd}",
+                    cfg.arch()
+                );
+            }
+        }
+    }
+}
+
+/// Training 6 steps, or 3 steps + checkpoint + resume + 3 steps, ends at the same weights.
+#[test]
+fn training_resumes_exactly_from_a_checkpoint() {
+    let data = dataset(8, 6, 2, 9);
+    let cfg = TrainConfig {
+        lr: 1e-3,
+        batch_items: 4,
+        queries_per_item: 32,
+        steps: 6,
+        checkpoint_every: 3,
+        validate_every: 0,
+        ..TrainConfig::default()
+    };
+    let make = || {
+        Trainer::new(
+            FieldNet::new(ModelConfig::Context(small_context()), 2).unwrap(),
+            cfg.clone(),
+        )
+        .unwrap()
+    };
+    let mut straight = make();
+    straight
+        .run(std::slice::from_ref(&data), None, None, |_| true)
+        .unwrap();
+
+    let ckpt = tmp("resume.ckpt");
+    let mut first = make();
+    first
+        .run(std::slice::from_ref(&data), None, Some(&ckpt), |p| {
+            p.step < 3
+        })
+        .unwrap();
+    assert_eq!(first.step(), 3);
+    let mut resumed = Trainer::resume(&ckpt).unwrap();
+    assert_eq!(resumed.step(), 3);
+    resumed
+        .run(std::slice::from_ref(&data), None, Some(&ckpt), |_| true)
+        .unwrap();
+    assert_eq!(resumed.step(), 6);
+
+    let s = &data.samples[0];
+    let a = straight.net().predict(&s.grid, s.goal).unwrap();
+    let b = resumed.net().predict(&s.grid, s.goal).unwrap();
+    assert_eq!(a.values(), b.values());
+}
+
+#[test]
+fn bad_inputs_are_errors_not_panics() {
+    let grid = grid67();
+    let ctx = FieldNet::new(ModelConfig::Context(small_context()), 1).unwrap();
+    let bad_points = [Point2::new(f32::NAN, 1.0)];
+    assert!(matches!(
+        ctx.predict_encoded(&Batch::points(&grid, Cell2::new(0, 0), &bad_points)),
+        Err(NetsError::InvalidInput(_))
+    ));
+    let outside = [Point2::new(6.5, 1.0)];
+    assert!(matches!(
+        ctx.predict_encoded(&Batch::points(&grid, Cell2::new(0, 0), &outside)),
+        Err(NetsError::InvalidInput(_))
+    ));
+    assert!(
+        ctx.predict(&grid, Cell2::new(2, 2)).is_err(),
+        "goal on an obstacle"
+    );
+    let plain = FieldNet::new(all_configs().remove(0), 1).unwrap();
+    let err = plain.predict(&grid, Cell2::new(0, 0)).unwrap_err();
+    assert!(err.to_string().contains("plain field was trained"), "{err}");
+    assert!(plain
+        .predict(&Grid2::new(5, 5).unwrap(), Cell2::new(1, 2))
+        .is_err());
+    let mut bad = small_context();
+    bad.encoder[0].stride = 2;
+    assert!(matches!(
+        FieldNet::new(ModelConfig::Context(bad), 0),
+        Err(NetsError::InvalidConfig(_))
+    ));
+    assert!(Trainer::new(
+        ctx,
+        TrainConfig {
+            lr: -1.0,
+            ..TrainConfig::default()
+        }
+    )
+    .is_err());
+}
+
+#[test]
+fn same_seed_same_network() {
+    let grid = grid67();
+    let a = FieldNet::new(ModelConfig::Hyper(small_hyper()), 4).unwrap();
+    let b = FieldNet::new(ModelConfig::Hyper(small_hyper()), 4).unwrap();
+    assert_eq!(
+        a.predict(&grid, Cell2::new(0, 0)).unwrap().values(),
+        b.predict(&grid, Cell2::new(0, 0)).unwrap().values()
+    );
+}

@@ -1,0 +1,291 @@
+//! Trains an environment-field network on generated mazes, checkpointing as it goes, and
+//! reports the validation loss and the navigation success on held-out generated mazes.
+//!
+//! ```text
+//! cargo run --release --example train_maze -- --arch context --size 28 --steps 20000 --out models/context_28.safetensors
+//! cargo run --release --example train_maze -- --resume models/context_28.safetensors.ckpt --steps 30000 --out models/context_28.safetensors
+//! cargo run --release --example train_maze -- --arch plain --size 8 --steps 2000 --lr 1e-3
+//! ```
+//!
+//! `--size 8,16,28` trains one model on all three sizes (one dataset per size, taken in turn).
+
+use anyhow::{bail, Context, Result};
+use clap::Parser;
+use envfield::eikonal::Order;
+use envfield::grid::MoveRule;
+use envfield::mazes::{Dataset, DatasetConfig, GeneratorKind, MazeGenerator, TargetKind};
+use envfield::nets::{
+    ContextConfig, FieldNet, GoalConfig, HyperConfig, MlpConfig, ModelConfig, PlainConfig,
+    TargetEncoding, TrainConfig, Trainer,
+};
+use envfield::plan::{evaluate, EvalConfig, FieldDescent};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::path::PathBuf;
+
+#[global_allocator]
+static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
+#[derive(Parser)]
+#[command(about = "Train an environment-field network on generated mazes")]
+struct Args {
+    /// plain, goal, context or hyper.
+    #[arg(long, default_value = "context")]
+    arch: String,
+    /// gridworld, crossings, rooms or perfect.
+    #[arg(long, default_value = "gridworld")]
+    generator: String,
+    /// Maze side, or several separated by commas (one model for all).
+    #[arg(long, default_value = "28")]
+    size: String,
+    /// Training mazes per size (plain and goal use one maze).
+    #[arg(long, default_value_t = 5000)]
+    mazes: usize,
+    /// Goals per training maze.
+    #[arg(long, default_value_t = 4)]
+    goals_per_maze: usize,
+    /// Target field: vin or strict (graph distance under that rule), fmm1 or fmm2.
+    #[arg(long, default_value = "vin")]
+    target: String,
+    /// Total optimiser steps.
+    #[arg(long, default_value_t = 20_000)]
+    steps: u64,
+    /// Mazes (with one goal each) per step.
+    #[arg(long, default_value_t = 32)]
+    batch: usize,
+    /// Query cells per maze per step.
+    #[arg(long, default_value_t = 256)]
+    queries: usize,
+    /// Peak learning rate (the paper's 5e-5 is the library default; larger trains faster here).
+    #[arg(long, default_value_t = 1e-3)]
+    lr: f64,
+    /// Final learning rate as a fraction of the peak (cosine decay).
+    #[arg(long, default_value_t = 0.05)]
+    final_lr: f64,
+    /// Seed of the data, the weights and the batches.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Where the final weights go (a checkpoint with optimiser state goes to OUT.ckpt).
+    #[arg(long, default_value = "out/field.safetensors")]
+    out: PathBuf,
+    /// Resume from this checkpoint (its model and training configs win over the flags,
+    /// except --steps).
+    #[arg(long)]
+    resume: Option<PathBuf>,
+    /// Held-out mazes for the navigation check at the end.
+    #[arg(long, default_value_t = 200)]
+    eval_mazes: usize,
+    /// Output encoding: `reciprocal` (the paper's 1/(1+d)) or `linear:SCALE` (1 - d/SCALE).
+    #[arg(long, default_value = "reciprocal")]
+    encoding: String,
+    /// Checkpoint and validate every N steps.
+    #[arg(long, default_value_t = 500)]
+    every: u64,
+}
+
+fn target_kind(s: &str) -> Result<TargetKind> {
+    Ok(match s {
+        "fmm1" => TargetKind::FastMarching(Order::First),
+        "fmm2" => TargetKind::FastMarching(Order::Second),
+        rule => TargetKind::Graph(rule.parse::<MoveRule>()?),
+    })
+}
+
+fn encoding(s: &str) -> Result<TargetEncoding> {
+    Ok(match s.split_once(':') {
+        None if s == "reciprocal" => TargetEncoding::Reciprocal,
+        Some(("linear", scale)) => TargetEncoding::Linear {
+            scale: scale
+                .parse()
+                .with_context(|| format!("bad linear scale `{scale}`"))?,
+        },
+        _ => bail!("unknown --encoding `{s}` (reciprocal or linear:SCALE)"),
+    })
+}
+
+fn main() -> Result<()> {
+    let args = Args::parse();
+    let encoding = encoding(&args.encoding)?;
+    let kind: GeneratorKind = args.generator.parse()?;
+    let sizes: Vec<usize> = args
+        .size
+        .split(',')
+        .map(|s| {
+            s.trim()
+                .parse()
+                .with_context(|| format!("bad --size entry `{s}`"))
+        })
+        .collect::<Result<_>>()?;
+    let target = target_kind(&args.target)?;
+    let rule = match target {
+        TargetKind::Graph(rule) => rule,
+        TargetKind::FastMarching(_) => MoveRule::Strict,
+    };
+    let single = matches!(args.arch.as_str(), "plain" | "goal");
+    if single && sizes.len() > 1 {
+        bail!("--arch {} learns one maze: give one --size", args.arch);
+    }
+    // Training data: mazes 0..mazes of the seed; the held-out mazes use another seed.
+    let mut datasets = Vec::new();
+    let mut validation = Vec::new();
+    for &size in &sizes {
+        let generator = MazeGenerator::new(kind, size)?;
+        let (mazes, goals) = match args.arch.as_str() {
+            "plain" => (1, 1),
+            "goal" => (1, args.goals_per_maze.max(64)),
+            _ => (args.mazes, args.goals_per_maze),
+        };
+        let cfg = DatasetConfig {
+            generator,
+            mazes,
+            goals_per_maze: goals,
+            target,
+            extra_obstacles: 0.0,
+            seed: args.seed,
+        };
+        datasets.push(Dataset::generate(&cfg)?);
+        let held_out = if single {
+            Dataset::generate(&DatasetConfig {
+                goals_per_maze: goals.min(16),
+                seed: args.seed ^ 0x51,
+                ..cfg
+            })?
+        } else {
+            Dataset::generate(&DatasetConfig {
+                mazes: 64,
+                goals_per_maze: 1,
+                seed: args.seed + 1_000_003,
+                ..cfg
+            })?
+        };
+        validation.push(held_out);
+    }
+    let first = &datasets[0].samples[0];
+    let mut trainer = match &args.resume {
+        Some(path) => {
+            let mut t = Trainer::resume(path)?;
+            t.set_steps(args.steps);
+            eprintln!("resumed {} at step {}", path.display(), t.step());
+            t
+        }
+        None => {
+            let model = match args.arch.as_str() {
+                "plain" => ModelConfig::Plain(PlainConfig {
+                    extent: vec![first.grid.rows(), first.grid.cols()],
+                    goal: vec![first.goal.row, first.goal.col],
+                    mlp: MlpConfig {
+                        hidden: 128,
+                        layers: 4,
+                        fourier: 4,
+                        ..MlpConfig::default()
+                    },
+                    encoding,
+                }),
+                "goal" => ModelConfig::Goal(GoalConfig {
+                    extent: vec![first.grid.rows(), first.grid.cols()],
+                    mlp: MlpConfig {
+                        hidden: 128,
+                        layers: 4,
+                        fourier: 4,
+                        ..MlpConfig::default()
+                    },
+                    encoding,
+                }),
+                "context" => ModelConfig::Context(ContextConfig {
+                    encoding,
+                    ..ContextConfig::default()
+                }),
+                "hyper" => ModelConfig::Hyper(HyperConfig {
+                    encoding,
+                    ..HyperConfig::default()
+                }),
+                other => bail!("unknown --arch `{other}` (plain, goal, context or hyper)"),
+            };
+            let train = TrainConfig {
+                lr: args.lr,
+                final_lr_fraction: args.final_lr,
+                batch_items: if single { 1 } else { args.batch },
+                queries_per_item: if args.arch == "plain" {
+                    first.grid.len()
+                } else {
+                    args.queries
+                },
+                steps: args.steps,
+                seed: args.seed,
+                checkpoint_every: args.every,
+                validate_every: args.every,
+                validation_samples: 64,
+                ..TrainConfig::default()
+            };
+            Trainer::new(FieldNet::new(model, args.seed)?, train)?
+        }
+    };
+    let net_info = format!(
+        "{} network, {} parameters, sizes {:?}, {} samples per size",
+        trainer.net().config().arch(),
+        trainer.net().parameter_count(),
+        sizes,
+        datasets[0].samples.len()
+    );
+    eprintln!("{net_info}");
+    if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    let ckpt = PathBuf::from(format!("{}.ckpt", args.out.display()));
+    let bar = ProgressBar::new(trainer.config().steps);
+    bar.set_style(ProgressStyle::with_template(
+        "{bar:30} {pos}/{len} steps {elapsed_precise} (eta {eta}) {msg}",
+    )?);
+    bar.set_position(trainer.step());
+    let val_for_training = (sizes.len() == 1).then(|| &validation[0]);
+    let mut last_val = None;
+    let summary = trainer.run(&datasets, val_for_training, Some(&ckpt), |p| {
+        bar.set_position(p.step);
+        if let Some(v) = p.validation {
+            last_val = Some(v);
+        }
+        bar.set_message(format!(
+            "loss {:.4} val {} {:.2} steps/s",
+            p.loss,
+            last_val.map_or("-".into(), |v| format!("{v:.4}")),
+            p.steps_per_second
+        ));
+        true
+    })?;
+    bar.finish();
+    let net = trainer.into_net();
+    net.save(&args.out)?;
+    eprintln!(
+        "saved {} (checkpoint {})",
+        args.out.display(),
+        ckpt.display()
+    );
+    println!("{}", serde_json::to_string(&summary)?);
+    // Navigation on held-out mazes (for plain/goal, the training maze itself).
+    for (k, &size) in sizes.iter().enumerate() {
+        let val_loss = envfield::nets::validation_loss(&net, &validation[k], 256)?;
+        let mazes = if single {
+            vec![envfield::grid::Maze {
+                grid: first.grid.clone(),
+                start: None,
+                goal: Some(first.goal),
+            }]
+        } else {
+            MazeGenerator::new(kind, size)?.generate_many(args.eval_mazes, args.seed + 1_000_003)?
+        };
+        let planner = FieldDescent::new(&net, rule);
+        let eval = EvalConfig {
+            rule,
+            pairs_per_maze: if single { 64 } else { 1 },
+            seed: 7,
+        };
+        let report = evaluate(&planner, &mazes, &eval, &mut |_, _| {})?;
+        println!(
+            "{{\"size\":{size},\"validation_l1\":{val_loss:.5},\"success_rate\":{:.2},\"path_ratio\":{:.4},\"pairs\":{},\"ms_per_path\":{:.3}}}",
+            report.summary.success_rate,
+            report.summary.path_ratio,
+            report.summary.pairs,
+            report.summary.ms_per_path
+        );
+    }
+    Ok(())
+}
