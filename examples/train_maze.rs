@@ -243,6 +243,17 @@ fn main() -> Result<()> {
         if let Some(v) = p.validation {
             last_val = Some(v);
         }
+        if bar.is_hidden() && (p.validation.is_some() || p.checkpointed) {
+            eprintln!(
+                "step {}/{} loss {:.4} val {} {:.2} steps/s {:.0} s",
+                p.step,
+                p.steps,
+                p.loss,
+                last_val.map_or("-".into(), |v| format!("{v:.4}")),
+                p.steps_per_second,
+                p.elapsed.as_secs_f64()
+            );
+        }
         bar.set_message(format!(
             "loss {:.4} val {} {:.2} steps/s",
             p.loss,

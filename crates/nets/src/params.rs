@@ -123,14 +123,19 @@ impl AdamW {
             let Some(g) = grads.get(var.as_tensor()) else {
                 continue;
             };
+            // Gradients carry the graph that made them; the moments must not, or every step's
+            // graph stays alive through them.
+            let g = g.detach();
+            let g = &g;
             let m = ((&self.m[i] * self.beta1)? + (g * (1.0 - self.beta1))?)?;
             let v = ((&self.v[i] * self.beta2)? + (g.sqr()? * (1.0 - self.beta2))?)?;
             let denom = ((&v / c2)?.sqrt()? + self.eps)?;
-            let mut theta = var.as_tensor().clone();
+            let (m, v) = (m.detach(), v.detach());
+            let mut theta = var.as_tensor().detach();
             if self.weight_decay > 0.0 {
                 theta = (theta * (1.0 - self.lr * self.weight_decay))?;
             }
-            let update = ((&m / denom)? * step_size)?;
+            let update = ((&m / &denom)? * step_size)?;
             var.set(&(theta - update)?)?;
             self.m[i] = m;
             self.v[i] = v;

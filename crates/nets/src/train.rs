@@ -302,9 +302,17 @@ impl Trainer {
         Ok(value)
     }
 
-    /// The training batch of step `step` from `data`: seeded by the config's seed and the step,
-    /// so a resumed run draws the same batches as an uninterrupted one.
-    fn sample_batch(&self, data: &Dataset, step: u64) -> Result<(Batch, Vec<f32>)> {
+    /// The training batch of step `step` from `data` and its targets (in the network's
+    /// encoding): `batch_items` random samples, `queries_per_item` random cells each, seeded by
+    /// the config's seed and the step, so a resumed run draws the same batches as an
+    /// uninterrupted one.
+    ///
+    /// # Errors
+    /// [`NetsError::InvalidInput`] for an empty dataset.
+    pub fn sample_batch(&self, data: &Dataset, step: u64) -> Result<(Batch, Vec<f32>)> {
+        if data.samples.is_empty() {
+            return Err(NetsError::InvalidInput("empty dataset".into()));
+        }
         let mut rng = SplitMix64::new(
             self.config
                 .seed
