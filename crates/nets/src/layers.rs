@@ -256,20 +256,25 @@ pub(crate) struct Conv {
 }
 
 impl Conv {
+    /// Kaiming-normal initialisation (for a ReLU after it).
     pub(crate) fn new(
         store: &mut ParamStore,
         name: &str,
         cin: usize,
         spec: ConvSpec,
     ) -> Result<Self> {
-        let fan_in = 9 * cin;
-        let linear = Linear::new(
-            store,
-            name,
-            fan_in,
-            spec.channels,
-            Init::Normal((2.0 / fan_in as f32).sqrt()),
-        )?;
+        let std = (2.0 / (9 * cin) as f32).sqrt();
+        Self::with_init(store, name, cin, spec, Init::Normal(std))
+    }
+
+    pub(crate) fn with_init(
+        store: &mut ParamStore,
+        name: &str,
+        cin: usize,
+        spec: ConvSpec,
+        init: Init,
+    ) -> Result<Self> {
+        let linear = Linear::new(store, name, 9 * cin, spec.channels, init)?;
         Ok(Self { linear, spec })
     }
 

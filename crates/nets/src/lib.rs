@@ -11,6 +11,8 @@
 //!   [`BoundField`], a [`ContinuousField2`](envfield_grid::ContinuousField2)).
 //! - [`Trainer`]: L1 on the paper's encoding, AdamW, seeded batches from
 //!   [`envfield_mazes::Dataset`]s, atomic safetensors checkpoints that resume exactly.
+//! - [`Vin`]: the Value Iteration Network baseline (Tamar et al. 2016), trained by imitation
+//!   ([`VinTrainer`]), and a [`Planner`](envfield_plan::Planner) that runs it at every step.
 //! - Weight files carry their config: [`FieldNet::load`] rebuilds the network, checking every
 //!   tensor's name and shape.
 //!
@@ -33,6 +35,7 @@ mod layers;
 mod model;
 mod params;
 mod train;
+mod vin;
 
 pub use envfield_grid::FieldModel;
 pub use error::{NetsError, Result};
@@ -42,3 +45,4 @@ pub use model::{
     ModelConfig, PlainConfig, TargetEncoding,
 };
 pub use train::{validation_loss, Progress, TrainConfig, TrainSummary, Trainer};
+pub use vin::{vin_examples, Vin, VinConfig, VinExample, VinTrainConfig, VinTrainer};

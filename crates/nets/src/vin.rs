@@ -1,0 +1,542 @@
+//! The Value Iteration Network baseline (Tamar et al. 2016), trained by imitation of optimal
+//! actions, and its planner, which calls the network at every step as VIN does.
+
+use crate::layers::{Conv, ConvSpec, IndexCache, Linear};
+use crate::params::{
+    to_safetensors, AdamW, Init, ParamStore, TensorFile, FORMAT, META_CONFIG, META_FORMAT,
+};
+use crate::{NetsError, Result};
+use candle_core::{Device, Tensor, D};
+use envfield_eikonal::dijkstra2;
+use envfield_grid::synth::SplitMix64;
+use envfield_grid::{Cell2, Grid2, Maze, MoveRule, Neighbourhood2, DIRECTIONS_8};
+use envfield_plan::{PlanError, PlanOutcome, Planner};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::collections::HashMap;
+use std::path::Path;
+
+/// VIN's settings (the published ones by default, with `iterations` per maze size).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct VinConfig {
+    /// Channels of the first 3x3 convolution `h` (150).
+    pub hidden: usize,
+    /// Channels of the Q layer (10).
+    pub q_channels: usize,
+    /// Value-iteration steps K (10, 20, 36 for 8, 16, 28).
+    pub iterations: usize,
+    /// The move rule whose 8 actions the network chooses from.
+    pub rule: MoveRule,
+}
+
+impl VinConfig {
+    /// VIN's published setting for an `size x size` maze: K = 10, 20, 36 for 8, 16, 28
+    /// (about 1.3 x size otherwise).
+    pub fn for_size(size: usize) -> Self {
+        let iterations = match size {
+            8 => 10,
+            16 => 20,
+            28 => 36,
+            n => (n * 13).div_ceil(10).max(4),
+        };
+        Self {
+            hidden: 150,
+            q_channels: 10,
+            iterations,
+            rule: MoveRule::Vin,
+        }
+    }
+
+    fn validate(&self) -> Result<()> {
+        if self.hidden == 0 || self.q_channels == 0 || self.iterations == 0 {
+            return Err(NetsError::InvalidConfig(format!(
+                "vin: hidden, q_channels and iterations must be >= 1 (got {self:?})"
+            )));
+        }
+        Ok(())
+    }
+}
+
+#[derive(Serialize, Deserialize)]
+#[serde(tag = "arch", rename = "vin")]
+struct VinFileConfig {
+    #[serde(flatten)]
+    config: VinConfig,
+}
+
+/// A Value Iteration Network: `h = conv3x3(obstacles, goal reward)`, `r = conv1x1(h)`,
+/// `q = conv3x3([r, v])`, `v = max_channels(q)` repeated K times, then the Q values at the
+/// agent's cell through a linear layer to 8 action logits (the order of
+/// [`envfield_grid::DIRECTIONS_8`]).
+#[derive(Debug)]
+pub struct Vin {
+    config: VinConfig,
+    store: ParamStore,
+    h: Conv,
+    r: Linear,
+    q: Conv,
+    policy: Linear,
+    cache: IndexCache,
+    device: Device,
+}
+
+impl Vin {
+    /// A freshly initialised network (seeded).
+    ///
+    /// # Errors
+    /// [`NetsError::InvalidConfig`].
+    pub fn new(config: VinConfig, seed: u64) -> Result<Self> {
+        config.validate()?;
+        let device = Device::Cpu;
+        let mut store = ParamStore::new(seed, &device);
+        // VIN initialises every weight with standard deviation 0.01; larger Q weights make the
+        // K max-iterations blow up.
+        let small = Init::Normal(0.01);
+        let h = Conv::with_init(&mut store, "h", 2, ConvSpec::new(config.hidden, 1), small)?;
+        let r = Linear::new(&mut store, "r", config.hidden, 1, small)?;
+        let q = Conv::with_init(
+            &mut store,
+            "q",
+            2,
+            ConvSpec::new(config.q_channels, 1),
+            small,
+        )?;
+        let policy = Linear::new(&mut store, "policy", config.q_channels, 8, small)?;
+        Ok(Self {
+            config,
+            store,
+            h,
+            r,
+            q,
+            policy,
+            cache: IndexCache::default(),
+            device,
+        })
+    }
+
+    /// The config.
+    pub fn config(&self) -> &VinConfig {
+        &self.config
+    }
+
+    /// Number of trainable scalars.
+    pub fn parameter_count(&self) -> usize {
+        self.store.count()
+    }
+
+    /// The Q maps (B, H, W, q_channels) after K iterations, for mazes of one size.
+    fn q_maps(&self, grids: &[&Grid2], goals: &[Cell2]) -> Result<Tensor> {
+        let (h, w) = (grids[0].rows(), grids[0].cols());
+        let b = grids.len();
+        let mut input = vec![0f32; b * h * w * 2];
+        for (k, (g, goal)) in grids.iter().zip(goals).enumerate() {
+            if (g.rows(), g.cols()) != (h, w) {
+                return Err(NetsError::InvalidInput("VIN batch mixes maze sizes".into()));
+            }
+            for (i, &o) in g.obstacles().iter().enumerate() {
+                input[(k * h * w + i) * 2] = o as u8 as f32;
+            }
+            input[(k * h * w + goal.row * w + goal.col) * 2 + 1] = 10.0;
+        }
+        let x = Tensor::from_vec(input, (b, h, w, 2), &self.device)?;
+        let hidden = self.h.forward(&x, &self.cache)?;
+        let r = self
+            .r
+            .forward(&hidden.reshape((b * h * w, self.config.hidden))?)?
+            .reshape((b, h, w, 1))?;
+        let mut v = Tensor::zeros((b, h, w, 1), x.dtype(), &self.device)?;
+        let mut q = self.q.forward(&Tensor::cat(&[&r, &v], 3)?, &self.cache)?;
+        for _ in 0..self.config.iterations {
+            v = q.max_keepdim(D::Minus1)?;
+            q = self.q.forward(&Tensor::cat(&[&r, &v], 3)?, &self.cache)?;
+        }
+        Ok(q)
+    }
+
+    /// Action logits (N, 8) for `states[i]` of maze `items[i]`.
+    fn logits(&self, q: &Tensor, w: usize, h: usize, states: &[(usize, Cell2)]) -> Result<Tensor> {
+        let ids: Vec<u32> = states
+            .iter()
+            .map(|&(b, c)| (b * h * w + c.row * w + c.col) as u32)
+            .collect();
+        let n = ids.len();
+        let flat = q.reshape((
+            q.elem_count() / self.config.q_channels,
+            self.config.q_channels,
+        ))?;
+        let at = flat.index_select(&Tensor::from_vec(ids, n, &self.device)?, 0)?;
+        self.policy.forward(&at)
+    }
+
+    /// The 8 action logits at `state` of `grid` with `goal` (one full network pass).
+    ///
+    /// # Errors
+    /// A state or goal outside the grid or on an obstacle.
+    pub fn action_logits(&self, grid: &Grid2, goal: Cell2, state: Cell2) -> Result<[f32; 8]> {
+        grid.check_free(goal, "goal")?;
+        grid.check_free(state, "state")?;
+        let q = self.q_maps(&[grid], &[goal])?;
+        let l = self.logits(&q, grid.cols(), grid.rows(), &[(0, state)])?;
+        let v = l.flatten_all()?.to_vec1::<f32>()?;
+        let mut out = [0f32; 8];
+        out.copy_from_slice(&v);
+        Ok(out)
+    }
+
+    /// Saves weights and config (atomically).
+    ///
+    /// # Errors
+    /// I/O errors naming the file.
+    pub fn save(&self, path: impl AsRef<Path>) -> Result<()> {
+        self.write(path.as_ref(), None)
+    }
+
+    fn write(&self, path: &Path, optimiser: Option<&AdamW>) -> Result<()> {
+        let mut tensors: Vec<(String, Tensor)> = self
+            .store
+            .names()
+            .iter()
+            .cloned()
+            .zip(self.store.vars().iter().map(|v| v.as_tensor().clone()))
+            .collect();
+        let mut meta = HashMap::new();
+        meta.insert(META_FORMAT.to_string(), FORMAT.to_string());
+        let cfg = serde_json::to_string(&VinFileConfig {
+            config: self.config,
+        })
+        .map_err(|e| NetsError::InvalidConfig(e.to_string()))?;
+        meta.insert(META_CONFIG.to_string(), cfg);
+        if let Some(opt) = optimiser {
+            let (m, v) = opt.moments();
+            for (i, name) in self.store.names().iter().enumerate() {
+                tensors.push((format!("optimiser.m.{name}"), m[i].clone()));
+                tensors.push((format!("optimiser.v.{name}"), v[i].clone()));
+            }
+            meta.insert("envfield.step".into(), opt.step.to_string());
+        }
+        envfield_grid::write_atomic(path, &to_safetensors(&tensors, meta)?)?;
+        Ok(())
+    }
+
+    /// Loads a network saved by [`Vin::save`] or a VIN training checkpoint.
+    ///
+    /// # Errors
+    /// [`NetsError::Checkpoint`] for an unreadable or foreign file; missing, misshapen or
+    /// unexpected tensors.
+    pub fn load(path: impl AsRef<Path>) -> Result<Self> {
+        Ok(Self::load_with_state(path.as_ref())?.0)
+    }
+
+    fn load_with_state(path: &Path) -> Result<(Self, Option<(Vec<Tensor>, Vec<Tensor>, u64)>)> {
+        let mut file = TensorFile::read(path)?;
+        let bad = |reason: String| NetsError::Checkpoint {
+            path: path.to_path_buf(),
+            reason,
+        };
+        let json = file
+            .metadata
+            .get(META_CONFIG)
+            .ok_or_else(|| bad("no model config".into()))?;
+        let cfg: VinFileConfig =
+            serde_json::from_str(json).map_err(|e| bad(format!("not a VIN file: {e}")))?;
+        let net = Self::new(cfg.config, 0)?;
+        let mut state = None;
+        if let Some(step) = file.metadata.get("envfield.step").cloned() {
+            let step: u64 = step.parse().map_err(|e| bad(format!("bad step: {e}")))?;
+            let (mut m, mut v) = (Vec::new(), Vec::new());
+            for (name, var) in net.store.names().iter().zip(net.store.vars()) {
+                m.push(file.take(
+                    path,
+                    &format!("optimiser.m.{name}"),
+                    var.dims(),
+                    &net.device,
+                )?);
+                v.push(file.take(
+                    path,
+                    &format!("optimiser.v.{name}"),
+                    var.dims(),
+                    &net.device,
+                )?);
+            }
+            state = Some((m, v, step));
+        }
+        let mut loaded = Vec::new();
+        for (name, var) in net.store.names().iter().zip(net.store.vars()) {
+            loaded.push(file.take(path, name, var.dims(), &net.device)?);
+        }
+        if let Some(name) = file.tensors.keys().min() {
+            return Err(NetsError::UnexpectedWeight {
+                path: path.to_path_buf(),
+                name: name.clone(),
+            });
+        }
+        for (var, t) in net.store.vars().iter().zip(loaded) {
+            var.set(&t)?;
+        }
+        Ok((net, state))
+    }
+}
+
+/// The optimal action at every free reachable cell (index into DIRECTIONS_8), or None.
+fn optimal_actions(grid: &Grid2, goal: Cell2, rule: MoveRule) -> Result<Vec<Option<u8>>> {
+    let nb = Neighbourhood2::Eight(rule);
+    let d = dijkstra2(grid, &[goal], nb, std::f32::consts::SQRT_2)
+        .map_err(|e| NetsError::InvalidInput(e.to_string()))?;
+    Ok((0..grid.len())
+        .map(|i| {
+            let c = grid.cell(i);
+            let here = d.get(c)?;
+            if c == goal || !here.is_finite() {
+                return None;
+            }
+            let mut best: Option<(u8, f32)> = None;
+            for (k, &(dr, dc)) in DIRECTIONS_8.iter().enumerate() {
+                if !rule.allows(grid, c, dr, dc) {
+                    continue;
+                }
+                let to = c.offset(dr, dc)?;
+                let cost = if dr != 0 && dc != 0 {
+                    std::f32::consts::SQRT_2
+                } else {
+                    1.0
+                };
+                let total = cost + d.get(to).unwrap_or(f32::INFINITY);
+                if best.is_none_or(|(_, b)| total < b - 1e-4) {
+                    best = Some((k as u8, total));
+                }
+            }
+            best.map(|(k, _)| k)
+        })
+        .collect())
+}
+
+/// How to train VIN: imitation of optimal actions (cross-entropy), Adam.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct VinTrainConfig {
+    /// Learning rate (VIN used RMSProp at 2e-3; Adam at 2e-3 here).
+    pub lr: f64,
+    /// Mazes per step.
+    pub batch_mazes: usize,
+    /// States (free reachable cells with their optimal action) per maze per step.
+    pub states_per_maze: usize,
+    /// Total steps.
+    pub steps: u64,
+    /// Seed of the batches.
+    pub seed: u64,
+}
+
+impl Default for VinTrainConfig {
+    fn default() -> Self {
+        Self {
+            lr: 2e-3,
+            batch_mazes: 32,
+            states_per_maze: 10,
+            steps: 5000,
+            seed: 0,
+        }
+    }
+}
+
+/// Trains a [`Vin`] on (maze, goal) pairs, checkpointing and resuming like [`crate::Trainer`].
+#[derive(Debug)]
+pub struct VinTrainer {
+    net: Vin,
+    optimiser: AdamW,
+    config: VinTrainConfig,
+}
+
+/// One VIN training example: a maze, a goal, and the optimal action of each cell.
+#[derive(Clone, Debug)]
+pub struct VinExample {
+    grid: Grid2,
+    goal: Cell2,
+    actions: Vec<Option<u8>>,
+    states: Vec<usize>,
+}
+
+/// Builds VIN examples from mazes: each maze's own goal (or a random free cell), labelled by
+/// exact graph distances under `rule`. Mazes where the goal reaches no other cell are skipped.
+///
+/// # Errors
+/// A marked goal on an obstacle.
+pub fn vin_examples(mazes: &[Maze], rule: MoveRule, seed: u64) -> Result<Vec<VinExample>> {
+    let out: Result<Vec<Option<VinExample>>> = mazes
+        .par_iter()
+        .enumerate()
+        .map(|(i, m)| {
+            let free: Vec<Cell2> = m.grid.free_cells().collect();
+            if free.is_empty() {
+                return Ok(None);
+            }
+            let mut rng = SplitMix64::new(seed ^ (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
+            let goal = m.goal.unwrap_or_else(|| free[rng.below(free.len())]);
+            let actions = optimal_actions(&m.grid, goal, rule)?;
+            let states: Vec<usize> = (0..actions.len())
+                .filter(|&i| actions[i].is_some())
+                .collect();
+            Ok((!states.is_empty()).then(|| VinExample {
+                grid: m.grid.clone(),
+                goal,
+                actions,
+                states,
+            }))
+        })
+        .collect();
+    Ok(out?.into_iter().flatten().collect())
+}
+
+impl VinTrainer {
+    /// A trainer at step 0.
+    ///
+    /// # Errors
+    /// [`NetsError::InvalidConfig`].
+    pub fn new(net: Vin, config: VinTrainConfig) -> Result<Self> {
+        if !(config.lr > 0.0) || config.batch_mazes == 0 || config.states_per_maze == 0 {
+            return Err(NetsError::InvalidConfig(format!(
+                "vin training: {config:?}"
+            )));
+        }
+        let optimiser = AdamW::new(net.store.vars(), config.lr, (0.9, 0.999), 1e-8, 0.0)?;
+        Ok(Self {
+            net,
+            optimiser,
+            config,
+        })
+    }
+
+    /// Resumes from a checkpoint of [`VinTrainer::save_checkpoint`] with `config`.
+    ///
+    /// # Errors
+    /// As [`Vin::load`]; a weight file without optimiser state.
+    pub fn resume(path: impl AsRef<Path>, config: VinTrainConfig) -> Result<Self> {
+        let path = path.as_ref();
+        let (net, state) = Vin::load_with_state(path)?;
+        let (m, v, step) = state.ok_or_else(|| NetsError::Checkpoint {
+            path: path.to_path_buf(),
+            reason: "a weight file, not a training checkpoint".into(),
+        })?;
+        let mut t = Self::new(net, config)?;
+        t.optimiser.set_moments(m, v, step);
+        Ok(t)
+    }
+
+    /// Steps done.
+    pub fn step(&self) -> u64 {
+        self.optimiser.step
+    }
+
+    /// The network.
+    pub fn net(&self) -> &Vin {
+        &self.net
+    }
+
+    /// The network, consuming the trainer.
+    pub fn into_net(self) -> Vin {
+        self.net
+    }
+
+    /// Writes weights, config, optimiser moments and step atomically.
+    ///
+    /// # Errors
+    /// I/O errors naming the file.
+    pub fn save_checkpoint(&self, path: impl AsRef<Path>) -> Result<()> {
+        self.net.write(path.as_ref(), Some(&self.optimiser))
+    }
+
+    /// One step on a seeded batch of `examples` (all of one size); returns the loss.
+    ///
+    /// # Errors
+    /// [`NetsError::Diverged`]; [`NetsError::InvalidInput`] for no examples.
+    pub fn train_step(&mut self, examples: &[VinExample]) -> Result<f32> {
+        if examples.is_empty() {
+            return Err(NetsError::InvalidInput("no VIN examples".into()));
+        }
+        let mut rng = SplitMix64::new(
+            self.config
+                .seed
+                .wrapping_mul(0x9E37_79B9)
+                .wrapping_add(self.step()),
+        );
+        let picks: Vec<&VinExample> = (0..self.config.batch_mazes)
+            .map(|_| &examples[rng.below(examples.len())])
+            .collect();
+        let grids: Vec<&Grid2> = picks.iter().map(|e| &e.grid).collect();
+        let goals: Vec<Cell2> = picks.iter().map(|e| e.goal).collect();
+        let mut states = Vec::new();
+        let mut labels = Vec::new();
+        for (b, e) in picks.iter().enumerate() {
+            for _ in 0..self.config.states_per_maze {
+                let i = e.states[rng.below(e.states.len())];
+                states.push((b, e.grid.cell(i)));
+                labels.push(e.actions[i].unwrap_or(0) as u32);
+            }
+        }
+        let (h, w) = (grids[0].rows(), grids[0].cols());
+        let q = self.net.q_maps(&grids, &goals)?;
+        let logits = self.net.logits(&q, w, h, &states)?;
+        let n = labels.len();
+        let labels = Tensor::from_vec(labels, n, &self.net.device)?;
+        let loss = candle_nn::loss::cross_entropy(&logits, &labels)?;
+        let value = loss.to_scalar::<f32>()?;
+        if !value.is_finite() {
+            return Err(NetsError::Diverged {
+                step: self.step(),
+                loss: value,
+            });
+        }
+        self.optimiser.backward_step(self.net.store.vars(), &loss)?;
+        Ok(value)
+    }
+}
+
+/// VIN as a planner: at every step the network runs on the maze and the agent takes the legal
+/// action with the highest logit (VIN's own policy, masked to legal moves); it stops on the
+/// goal, after `max_steps`, or on revisiting a cell.
+impl Planner for Vin {
+    fn name(&self) -> &str {
+        "vin"
+    }
+
+    fn plan(
+        &self,
+        grid: &Grid2,
+        start: Cell2,
+        goal: Cell2,
+        max_steps: usize,
+    ) -> envfield_plan::Result<PlanOutcome> {
+        let model_err = |e: NetsError| {
+            PlanError::from(envfield_grid::GridError::Model {
+                model: "vin".into(),
+                source: Box::new(e),
+            })
+        };
+        grid.check_free(start, "start")?;
+        grid.check_free(goal, "goal")?;
+        let mut path = vec![start];
+        let mut seen = std::collections::HashSet::from([start]);
+        let mut here = start;
+        while here != goal && path.len() <= max_steps {
+            let logits = self.action_logits(grid, goal, here).map_err(model_err)?;
+            let best = (0..8)
+                .filter(|&k| {
+                    let (dr, dc) = DIRECTIONS_8[k];
+                    self.config.rule.allows(grid, here, dr, dc)
+                })
+                .max_by(|&a, &b| logits[a].total_cmp(&logits[b]));
+            let Some(k) = best else { break };
+            let (dr, dc) = DIRECTIONS_8[k];
+            let Some(next) = here.offset(dr, dc) else {
+                break;
+            };
+            if !seen.insert(next) {
+                break;
+            }
+            path.push(next);
+            here = next;
+        }
+        Ok(PlanOutcome {
+            success: here == goal,
+            path,
+        })
+    }
+}
