@@ -1,5 +1,10 @@
 //! Navigate mazes with a planner and report DESIGN.md's metrics.
 //!
+//! With no arguments it runs the shipped models: the learned field (`models/context.safetensors`)
+//! and VIN (`models/vin_{8,16,28}.safetensors`, picked by maze size) beside A* and fast
+//! marching, on VIN's test sets under the `vin` rule when `../shared/data/vin/` is there, and
+//! on generated gridworlds otherwise.
+//!
 //! ```text
 //! cargo run --release --example maze_nav                       # default suite, a table
 //! cargo run --release --example maze_nav -- --mazes ../shared/data/vin/vin_test_28.txt --rule vin --planner graph --json
@@ -13,8 +18,27 @@ use envfield::grid::{
     write_atomic, Cell2, FieldModel, HeatMapStyle, Maze, MoveRule, Neighbourhood2,
 };
 use envfield::mazes::{GeneratorKind, MazeGenerator};
+use envfield::nets::{FieldNet, Vin};
 use envfield::plan::{evaluate, AStar, EvalConfig, FieldDescent, Planner, Report};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+
+#[global_allocator]
+static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
+/// The shipped models.
+fn models_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("models")
+}
+
+/// VIN's test sets, read from the shared data folder when it is there.
+fn vin_test_sets() -> Option<Vec<PathBuf>> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/vin");
+    let files: Vec<PathBuf> = [8, 16, 28]
+        .iter()
+        .map(|s| dir.join(format!("vin_test_{s}.txt")))
+        .collect();
+    files.iter().all(|f| f.is_file()).then_some(files)
+}
 
 #[derive(Parser)]
 #[command(about = "Navigate mazes with a planner; prints success rate, path ratio and ms per path")]
@@ -25,7 +49,8 @@ struct Args {
     /// Generator: gridworld, crossings, rooms or perfect.
     #[arg(long, default_value = "gridworld")]
     generator: String,
-    /// Side of generated mazes. Without --mazes or --size, runs the default suite (8, 16, 28).
+    /// Side of generated mazes. Without --mazes or --size, runs the default suite: VIN's test
+    /// sets (8, 16, 28) when ../shared/data/vin is there, generated mazes of those sizes if not.
     #[arg(long)]
     size: Option<usize>,
     /// Number of generated mazes.
@@ -34,12 +59,18 @@ struct Args {
     /// Seed of generated mazes and random pairs.
     #[arg(long, default_value_t = 0)]
     seed: u64,
-    /// Planners, comma-separated: fmm (fast-marching field descent), graph (exact graph-distance
-    /// field descent under the rule), astar.
-    #[arg(long, default_value = "fmm,graph,astar")]
+    /// Planners, comma-separated: field (the learned context-aligned field, descent), hyper
+    /// (the hypernetwork field), vin (the VIN baseline, one network pass per step), fmm
+    /// (fast-marching field descent), graph (exact graph-distance field descent), astar.
+    #[arg(long, default_value = "field,vin,astar,fmm")]
     planner: String,
+    /// Weights for `field` or `hyper` (default: models/context.safetensors or
+    /// models/hyper.safetensors; a file named <arch>_<size>.safetensors there wins for mazes of
+    /// that size). VIN always loads models/vin_<size>.safetensors unless this names a VIN file.
+    #[arg(long)]
+    model: Option<PathBuf>,
     /// Move rule: strict or vin.
-    #[arg(long, default_value = "strict")]
+    #[arg(long, default_value = "vin")]
     rule: String,
     /// Random pairs per maze (mazes with both S and G use that pair).
     #[arg(long, default_value_t = 1)]
@@ -59,15 +90,56 @@ struct Args {
 enum Choice {
     Field(FieldDescent<Box<dyn FieldModel + Send + Sync>>),
     AStar(AStar),
+    Vin(Box<Vin>),
+}
+
+/// The weights for `arch` on mazes of side `size`: `--model`, else `<arch>_<size>`, else
+/// `<arch>` in models/.
+fn model_file(arch: &str, size: usize, explicit: Option<&Path>) -> Result<PathBuf> {
+    if let Some(p) = explicit {
+        return Ok(p.to_path_buf());
+    }
+    let dir = models_dir();
+    let sized = dir.join(format!("{arch}_{size}.safetensors"));
+    let any = dir.join(format!("{arch}.safetensors"));
+    for p in [&sized, &any] {
+        if p.is_file() {
+            return Ok(p.clone());
+        }
+    }
+    bail!(
+        "no {arch} model for {size}x{size} mazes: looked for {} and {} (train one with the \
+         command in README.md, or pass --model)",
+        sized.display(),
+        any.display()
+    )
 }
 
 impl Choice {
-    fn parse(name: &str, rule: MoveRule) -> Result<Self> {
+    fn parse(name: &str, rule: MoveRule, size: usize, model: Option<&Path>) -> Result<Self> {
         let model: Box<dyn FieldModel + Send + Sync> = match name {
             "fmm" => Box::new(FastMarching::default()),
             "graph" => Box::new(GraphDistance::new(Neighbourhood2::Eight(rule))),
             "astar" => return Ok(Choice::AStar(AStar { rule })),
-            other => bail!("unknown planner {other:?} (expected fmm, graph or astar)"),
+            "field" | "hyper" => {
+                let arch = if name == "field" { "context" } else { "hyper" };
+                let file = model_file(arch, size, model)?;
+                let net =
+                    FieldNet::load(&file).with_context(|| format!("loading {}", file.display()))?;
+                Box::new(net)
+            }
+            "vin" => {
+                let file = match model.filter(|p| Vin::load(p).is_ok()) {
+                    Some(p) => p.to_path_buf(),
+                    None => model_file("vin", size, None)?,
+                };
+                let vin =
+                    Vin::load(&file).with_context(|| format!("loading {}", file.display()))?;
+                return Ok(Choice::Vin(Box::new(vin)));
+            }
+            other => {
+                bail!("unknown planner {other:?} (expected field, hyper, vin, fmm, graph or astar)")
+            }
         };
         Ok(Choice::Field(FieldDescent::new(model, rule)))
     }
@@ -76,13 +148,14 @@ impl Choice {
         match self {
             Choice::Field(p) => p,
             Choice::AStar(p) => p,
+            Choice::Vin(p) => p.as_ref(),
         }
     }
 
     fn field_model(&self) -> Option<&dyn FieldModel> {
         match self {
             Choice::Field(p) => Some(p.model.as_ref()),
-            Choice::AStar(_) => None,
+            Choice::AStar(_) | Choice::Vin(_) => None,
         }
     }
 }
@@ -143,6 +216,19 @@ fn main() -> Result<()> {
             label: format!("{kind} {size}x{size}"),
             mazes: MazeGenerator::new(kind, size)?.generate_many(args.count, args.seed)?,
         }],
+        (None, None) if vin_test_sets().is_some() => vin_test_sets()
+            .unwrap_or_default()
+            .iter()
+            .map(|file| {
+                Ok(Suite {
+                    label: file
+                        .file_name()
+                        .map(|f| f.to_string_lossy().into_owned())
+                        .unwrap_or_default(),
+                    mazes: envfield::grid::read_mazes(file)?,
+                })
+            })
+            .collect::<Result<_>>()?,
         (None, None) => [8usize, 16, 28]
             .into_iter()
             .map(|size| {
@@ -153,11 +239,7 @@ fn main() -> Result<()> {
             })
             .collect::<Result<_>>()?,
     };
-    let choices: Vec<Choice> = args
-        .planner
-        .split(',')
-        .map(|n| Choice::parse(n.trim(), rule))
-        .collect::<Result<_>>()?;
+    let names: Vec<&str> = args.planner.split(',').map(str::trim).collect();
     let cfg = EvalConfig {
         rule,
         pairs_per_maze: args.pairs,
@@ -167,6 +249,14 @@ fn main() -> Result<()> {
     let mut all_paths = Vec::new();
     let mut lines = Vec::new();
     for suite in &suites {
+        let size = suite
+            .mazes
+            .first()
+            .map_or(0, |m| m.grid.rows().max(m.grid.cols()));
+        let choices: Vec<Choice> = names
+            .iter()
+            .map(|n| Choice::parse(n, rule, size, args.model.as_deref()))
+            .collect::<Result<_>>()?;
         for choice in &choices {
             let bar = indicatif::ProgressBar::new(0).with_message(format!(
                 "{} {}",
