@@ -227,7 +227,7 @@ impl Vin {
         Ok(Self::load_with_state(path.as_ref())?.0)
     }
 
-    fn load_with_state(path: &Path) -> Result<(Self, Option<(Vec<Tensor>, Vec<Tensor>, u64)>)> {
+    fn load_with_state(path: &Path) -> Result<(Self, Option<OptimiserState>)> {
         let mut file = TensorFile::read(path)?;
         let bad = |reason: String| NetsError::Checkpoint {
             path: path.to_path_buf(),
@@ -276,6 +276,9 @@ impl Vin {
         Ok((net, state))
     }
 }
+
+/// Adam's first and second moments and the step, as saved in a checkpoint.
+type OptimiserState = (Vec<Tensor>, Vec<Tensor>, u64);
 
 /// The optimal action at every free reachable cell (index into DIRECTIONS_8), or None.
 fn optimal_actions(grid: &Grid2, goal: Cell2, rule: MoveRule) -> Result<Vec<Option<u8>>> {
@@ -391,7 +394,11 @@ impl VinTrainer {
     /// # Errors
     /// [`NetsError::InvalidConfig`].
     pub fn new(net: Vin, config: VinTrainConfig) -> Result<Self> {
-        if !(config.lr > 0.0) || config.batch_mazes == 0 || config.states_per_maze == 0 {
+        if config.lr.is_nan()
+            || config.lr <= 0.0
+            || config.batch_mazes == 0
+            || config.states_per_maze == 0
+        {
             return Err(NetsError::InvalidConfig(format!(
                 "vin training: {config:?}"
             )));
