@@ -1,7 +1,9 @@
 //! Planning time per path on generated gridworld mazes, one group per size (8, 16, 28, 64).
 //! Each group holds the exact oracles (fast-marching and graph-distance field descent: the
-//! whole field computed, then the walk) and A*; the learned planners and VIN join the same
-//! groups in later issues.
+//! whole field computed, then the walk), A*, and, when the shipped models are in `models/`,
+//! the learned field (the whole field predicted once, then descent; all inference included),
+//! the hypernetwork, and VIN (one network pass per step, VIN's own protocol). Pairs and rule
+//! are `vin` here, as in the maze benchmark.
 //!
 //! `cargo bench --bench maze_planning`
 
@@ -12,23 +14,49 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use envfield::eikonal::{FastMarching, GraphDistance};
 use envfield::grid::{MoveRule, Neighbourhood2};
 use envfield::mazes::{evaluation_pairs, GeneratorKind, MazeGenerator};
+use envfield::nets::{FieldNet, Vin};
 use envfield::plan::{AStar, FieldDescent, Planner};
 use std::hint::black_box;
+use std::path::Path;
+
+#[global_allocator]
+static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
+fn model(name: &str) -> Option<std::path::PathBuf> {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("models")
+        .join(name);
+    p.is_file().then_some(p)
+}
 
 fn bench_planners(c: &mut Criterion) {
-    let rule = MoveRule::Strict;
+    let rule = MoveRule::Vin;
     let fmm = FieldDescent::new(FastMarching::default(), rule);
     let graph = FieldDescent::new(GraphDistance::new(Neighbourhood2::Eight(rule)), rule);
     let astar = AStar { rule };
-    let planners: [&dyn Planner; 3] = [&fmm, &graph, &astar];
+    let load = |arch: &str, size: usize| {
+        model(&format!("{arch}_{size}.safetensors"))
+            .or_else(|| model(&format!("{arch}.safetensors")))
+            .map(|p| FieldDescent::new(FieldNet::load(p).expect("shipped model loads"), rule))
+    };
     for size in [8usize, 16, 28, 64] {
+        let field = load("context", size);
+        let hyper = load("hyper", size);
+        let vin =
+            model(&format!("vin_{size}.safetensors")).map(|p| Vin::load(p).expect("vin loads"));
+        let mut planners: Vec<&dyn Planner> = vec![&fmm, &graph, &astar];
+        if size <= 28 {
+            planners.extend(field.as_ref().map(|p| p as &dyn Planner));
+            planners.extend(hyper.as_ref().map(|p| p as &dyn Planner));
+        }
+        planners.extend(vin.as_ref().map(|p| p as &dyn Planner));
         let mazes = MazeGenerator::new(GeneratorKind::Gridworld, size)
             .expect("size")
             .generate_many(50, 1)
             .expect("mazes");
         let pairs = evaluation_pairs(&mazes, rule, 2, 1).expect("pairs");
         let mut group = c.benchmark_group(format!("maze_planning_{size}"));
-        for p in planners {
+        for &p in &planners {
             group.bench_function(BenchmarkId::new(p.name(), size), |b| {
                 let mut k = 0;
                 b.iter(|| {
