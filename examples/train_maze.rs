@@ -15,8 +15,8 @@ use envfield::eikonal::Order;
 use envfield::grid::MoveRule;
 use envfield::mazes::{Dataset, DatasetConfig, GeneratorKind, MazeGenerator, TargetKind};
 use envfield::nets::{
-    ContextConfig, FieldNet, GoalConfig, HyperConfig, MlpConfig, ModelConfig, PlainConfig,
-    TargetEncoding, TrainConfig, Trainer,
+    ContextConfig, ConvSpec, FieldNet, GoalConfig, HyperConfig, MlpConfig, ModelConfig,
+    PlainConfig, PropagationConfig, TargetEncoding, TrainConfig, Trainer,
 };
 use envfield::plan::{evaluate, EvalConfig, FieldDescent};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -77,6 +77,19 @@ struct Args {
     /// Output encoding: `reciprocal` (the paper's 1/(1+d)) or `linear:SCALE` (1 - d/SCALE).
     #[arg(long, default_value = "reciprocal")]
     encoding: String,
+    /// Context encoder convolutions as CHANNELS:DILATION, comma-separated (default: the
+    /// library's 7-layer dilated encoder).
+    #[arg(long)]
+    encoder: Option<String>,
+    /// Add value-iteration layers with this many Q channels to the context encoder (0: none).
+    #[arg(long, default_value_t = 0)]
+    propagation: usize,
+    /// MLP hidden width and layers of the context network, as WIDTH:LAYERS.
+    #[arg(long, default_value = "64:3")]
+    mlp: String,
+    /// Weight of the neighbour-difference loss (0: plain L1). Also applies to a resumed run.
+    #[arg(long)]
+    neighbour_weight: Option<f64>,
     /// Checkpoint and validate every N steps.
     #[arg(long, default_value_t = 500)]
     every: u64,
@@ -164,6 +177,9 @@ fn main() -> Result<()> {
         Some(path) => {
             let mut t = Trainer::resume(path)?;
             t.set_steps(args.steps);
+            if let Some(w) = args.neighbour_weight {
+                t.set_neighbour_weight(w)?;
+            }
             eprintln!("resumed {} at step {}", path.display(), t.step());
             t
         }
@@ -190,10 +206,32 @@ fn main() -> Result<()> {
                     },
                     encoding,
                 }),
-                "context" => ModelConfig::Context(ContextConfig {
-                    encoding,
-                    ..ContextConfig::default()
-                }),
+                "context" => {
+                    let mut c = ContextConfig {
+                        encoding,
+                        ..ContextConfig::default()
+                    };
+                    if let Some(spec) = &args.encoder {
+                        c.encoder = spec
+                            .split(',')
+                            .map(|l| {
+                                let (ch, d) = l.split_once(':').unwrap_or((l, "1"));
+                                Ok(ConvSpec::new(ch.trim().parse()?, d.trim().parse()?))
+                            })
+                            .collect::<Result<_>>()
+                            .with_context(|| format!("bad --encoder `{spec}`"))?;
+                    }
+                    if args.propagation > 0 {
+                        c.propagation = Some(PropagationConfig {
+                            q_channels: args.propagation,
+                            ..PropagationConfig::default()
+                        });
+                    }
+                    let (w, l) = args.mlp.split_once(':').context("--mlp WIDTH:LAYERS")?;
+                    c.mlp.hidden = w.parse()?;
+                    c.mlp.layers = l.parse()?;
+                    ModelConfig::Context(c)
+                }
                 "hyper" => ModelConfig::Hyper(HyperConfig {
                     encoding,
                     ..HyperConfig::default()
@@ -214,6 +252,7 @@ fn main() -> Result<()> {
                 checkpoint_every: args.every,
                 validate_every: args.every,
                 validation_samples: 64,
+                neighbour_weight: args.neighbour_weight.unwrap_or(0.0),
                 ..TrainConfig::default()
             };
             Trainer::new(FieldNet::new(model, args.seed)?, train)?

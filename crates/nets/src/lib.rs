@@ -42,7 +42,7 @@ pub use error::{NetsError, Result};
 pub use layers::{Activation, ConvSpec, MlpConfig};
 pub use model::{
     prediction_to_distance, Batch, BoundField, ContextConfig, FieldNet, GoalConfig, HyperConfig,
-    ModelConfig, PlainConfig, TargetEncoding,
+    ModelConfig, PlainConfig, PropagationConfig, TargetEncoding,
 };
 pub use train::{validation_loss, Progress, TrainConfig, TrainSummary, Trainer};
 pub use vin::{vin_examples, Vin, VinConfig, VinExample, VinTrainConfig, VinTrainer};

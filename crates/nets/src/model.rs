@@ -1,8 +1,8 @@
 //! The four implicit field networks behind one type, [`FieldNet`].
 
 use crate::layers::{
-    encode_coords, sample_features, validate_convs, ConvSpec, ConvStack, IndexCache, Linear, Mlp,
-    MlpConfig,
+    encode_coords, sample_features, validate_convs, Conv, ConvSpec, ConvStack, IndexCache, Linear,
+    Mlp, MlpConfig,
 };
 use crate::params::{
     to_safetensors, Init, ParamStore, TensorFile, FORMAT, META_CONFIG, META_FORMAT,
@@ -119,6 +119,39 @@ pub struct ContextConfig {
     /// How distances are encoded as outputs.
     #[serde(default)]
     pub encoding: TargetEncoding,
+    /// Value-iteration layers on top of the encoder (see [`PropagationConfig`]); `None` is the
+    /// paper's plain encoder.
+    #[serde(default)]
+    pub propagation: Option<PropagationConfig>,
+}
+
+/// Value iteration inside the context encoder, VIN's recurrence (Tamar et al. 2016) as a
+/// feature extractor: a reward map `r = conv1x1(features)`, then `q = conv3x3([r, v])`,
+/// `v = max_channels(q)` repeated `K = ceil(iterations_per_cell * max(rows, cols))` times with
+/// shared weights, so information travels one cell per iteration across a maze of any size.
+/// The encoder's features, `q` and `v` are what the query samples.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PropagationConfig {
+    /// Channels of the Q layer (VIN: 10).
+    pub q_channels: usize,
+    /// Iterations per cell of the maze's longer side (VIN used 1.25-1.3).
+    pub iterations_per_cell: f32,
+}
+
+impl Default for PropagationConfig {
+    fn default() -> Self {
+        Self {
+            q_channels: 10,
+            iterations_per_cell: 1.3,
+        }
+    }
+}
+
+impl PropagationConfig {
+    /// The number of iterations for a `rows x cols` maze.
+    pub fn iterations(&self, rows: usize, cols: usize) -> usize {
+        ((self.iterations_per_cell * rows.max(cols) as f32).ceil() as usize).max(1)
+    }
 }
 
 impl Default for ContextConfig {
@@ -143,6 +176,7 @@ impl Default for ContextConfig {
                 ..MlpConfig::default()
             },
             encoding: TargetEncoding::Reciprocal,
+            propagation: None,
         }
     }
 }
@@ -292,6 +326,15 @@ impl ModelConfig {
                     ));
                 }
                 scale(c.coord_scale)?;
+                if let Some(p) = c.propagation {
+                    if p.q_channels == 0
+                        || !(p.iterations_per_cell.is_finite() && p.iterations_per_cell > 0.0)
+                    {
+                        return Err(NetsError::InvalidConfig(format!(
+                            "context propagation: q_channels >= 1 and iterations_per_cell > 0 (got {p:?})"
+                        )));
+                    }
+                }
                 c.mlp.validate("context mlp")
             }
             Self::Hyper(c) => {
@@ -450,11 +493,42 @@ struct Hyper {
     base: Vec<Linear>,
 }
 
+/// Value-iteration layers of a context encoder.
+#[derive(Debug)]
+struct Propagation {
+    reward: Linear,
+    q: Conv,
+    config: PropagationConfig,
+}
+
+impl Propagation {
+    /// (B, H, W, C) features -> (B, H, W, Q + 1): the last Q map and its channel maximum.
+    fn forward(&self, features: &Tensor, cache: &IndexCache) -> Result<Tensor> {
+        let (b, h, w, c) = features.dims4()?;
+        let r = self
+            .reward
+            .forward(&features.reshape((b * h * w, c))?)?
+            .reshape((b, h, w, 1))?;
+        let mut v = r.zeros_like()?;
+        let mut q = self.q.forward(&Tensor::cat(&[&r, &v], 3)?, cache)?;
+        for _ in 0..self.config.iterations(h, w) {
+            v = q.max_keepdim(3)?;
+            q = self.q.forward(&Tensor::cat(&[&r, &v], 3)?, cache)?;
+        }
+        v = q.max_keepdim(3)?;
+        Ok(Tensor::cat(&[&q, &v], 3)?)
+    }
+}
+
 #[derive(Debug)]
 enum Net {
     Plain(Mlp),
     Goal(Mlp),
-    Context { encoder: ConvStack, mlp: Mlp },
+    Context {
+        encoder: ConvStack,
+        propagation: Option<Propagation>,
+        mlp: Mlp,
+    },
     Hyper(Hyper),
 }
 
@@ -499,10 +573,29 @@ impl FieldNet {
             ModelConfig::Context(c) => {
                 let encoder =
                     ConvStack::new(&mut store, "encoder", cin(c.goal_channel), &c.encoder)?;
-                let feat = c.encoder.last().map_or(0, |s| s.channels);
+                let mut feat = c.encoder.last().map_or(0, |s| s.channels);
+                let propagation = match c.propagation {
+                    Some(p) => {
+                        let small = Init::Normal(0.01);
+                        let reward = Linear::new(&mut store, "vi.reward", feat, 1, small)?;
+                        let spec = ConvSpec::new(p.q_channels, 1);
+                        let q = Conv::with_init(&mut store, "vi.q", 2, spec, small)?;
+                        feat += p.q_channels + 1;
+                        Some(Propagation {
+                            reward,
+                            q,
+                            config: p,
+                        })
+                    }
+                    None => None,
+                };
                 let input = feat + 2 * c.mlp.encoded_width(2);
                 let mlp = Mlp::new(&mut store, "mlp", &c.mlp, input, 1)?;
-                Net::Context { encoder, mlp }
+                Net::Context {
+                    encoder,
+                    propagation,
+                    mlp,
+                }
             }
             ModelConfig::Hyper(c) => {
                 let encoder =
@@ -647,9 +740,20 @@ impl FieldNet {
                 let q = encode_coords(&self.normalise(queries, &batch.extent)?, c.mlp.fourier)?;
                 mlp.forward(&Tensor::cat(&[&g, &q], 1)?)?
             }
-            (Net::Context { encoder, mlp }, ModelConfig::Context(c)) => {
-                let features =
+            (
+                Net::Context {
+                    encoder,
+                    propagation,
+                    mlp,
+                },
+                ModelConfig::Context(c),
+            ) => {
+                let mut features =
                     encoder.forward(&self.grid_input(batch, c.goal_channel)?, &self.cache)?;
+                if let Some(p) = propagation {
+                    let values = p.forward(&features, &self.cache)?;
+                    features = Tensor::cat(&[&features, &values], 3)?;
+                }
                 let points: Vec<[f32; 2]> = batch
                     .queries
                     .chunks_exact(2)

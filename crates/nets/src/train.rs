@@ -45,6 +45,12 @@ pub struct TrainConfig {
     pub validate_every: u64,
     /// At most this many validation samples are used.
     pub validation_samples: usize,
+    /// Weight of the neighbour-difference loss: queries come in pairs of a cell and one of its
+    /// 8 neighbours, and the L1 error of the predicted difference between them (where both are
+    /// reachable) is added with this weight. Descent compares neighbours, so this trains the
+    /// field's local slope directly. 0 disables it (plain L1).
+    #[serde(default)]
+    pub neighbour_weight: f64,
 }
 
 impl Default for TrainConfig {
@@ -62,6 +68,7 @@ impl Default for TrainConfig {
             checkpoint_every: 500,
             validate_every: 500,
             validation_samples: 256,
+            neighbour_weight: 0.0,
         }
     }
 }
@@ -81,13 +88,16 @@ impl TrainConfig {
             && self.weight_decay >= 0.0
             && self.batch_items > 0
             && self.queries_per_item > 0
-            && self.validation_samples > 0;
+            && self.validation_samples > 0
+            && self.neighbour_weight >= 0.0
+            && (self.neighbour_weight == 0.0 || self.queries_per_item % 2 == 0);
         if ok {
             Ok(())
         } else {
             Err(NetsError::InvalidConfig(format!(
                 "training: need lr > 0, final_lr_fraction in [0, 1], betas in [0, 1), eps > 0, \
-                 weight_decay >= 0, batch_items, queries_per_item and validation_samples >= 1 (got {self:?})"
+                 weight_decay >= 0, batch_items, queries_per_item and validation_samples >= 1, \
+                 neighbour_weight >= 0 with an even queries_per_item (got {self:?})"
             )))
         }
     }
@@ -247,6 +257,21 @@ impl Trainer {
         &self.config
     }
 
+    /// Sets the neighbour-difference weight (see [`TrainConfig::neighbour_weight`]), for
+    /// example to fine-tune a resumed run with it.
+    ///
+    /// # Errors
+    /// [`NetsError::InvalidConfig`] for a negative weight or an odd `queries_per_item`.
+    pub fn set_neighbour_weight(&mut self, weight: f64) -> Result<()> {
+        let config = TrainConfig {
+            neighbour_weight: weight,
+            ..self.config.clone()
+        };
+        config.validate()?;
+        self.config = config;
+        Ok(())
+    }
+
     /// Sets the total number of steps (to train a resumed run further).
     pub fn set_steps(&mut self, steps: u64) {
         self.config.steps = steps;
@@ -274,7 +299,8 @@ impl Trainer {
     }
 
     /// One optimiser step on `batch` with `targets` (one encoded target per query); returns
-    /// the loss before the step.
+    /// the loss before the step. With a neighbour weight, consecutive queries are taken as
+    /// (cell, neighbour) pairs.
     ///
     /// # Errors
     /// [`NetsError::InvalidInput`] for mismatched targets; [`NetsError::Diverged`] for a loss
@@ -289,7 +315,23 @@ impl Trainer {
         }
         let pred = self.net.forward(batch)?;
         let target = Tensor::from_vec(targets.to_vec(), targets.len(), self.net.device())?;
-        let loss = (pred - target)?.abs()?.mean_all()?;
+        let mut loss = (&pred - &target)?.abs()?.mean_all()?;
+        if self.config.neighbour_weight > 0.0 && batch.len() % 2 == 0 {
+            let pairs = batch.len() / 2;
+            let mask: Vec<f32> = targets
+                .chunks_exact(2)
+                .map(|t| (t[0] >= 0.0 && t[1] >= 0.0) as u8 as f32)
+                .collect();
+            let reachable = mask.iter().sum::<f32>().max(1.0);
+            let mask = Tensor::from_vec(mask, pairs, self.net.device())?;
+            let diff = |t: &Tensor| -> Result<Tensor> {
+                let t = t.reshape((pairs, 2))?;
+                Ok((t.narrow(1, 1, 1)? - t.narrow(1, 0, 1)?)?.reshape(pairs)?)
+            };
+            let err = (diff(&pred)? - diff(&target)?)?.abs()?;
+            let slope = ((err * mask)?.sum_all()? / reachable as f64)?;
+            loss = (loss + (slope * self.config.neighbour_weight)?)?;
+        }
         let value = loss.to_scalar::<f32>()?;
         if !value.is_finite() {
             return Err(NetsError::Diverged {
@@ -341,8 +383,23 @@ impl Trainer {
                     .extend(s.grid.obstacles().iter().map(|&o| o as u8 as f32));
             }
             batch.goals.extend([s.goal.row as f32, s.goal.col as f32]);
-            for _ in 0..q {
-                let i = rng.below(rows * cols);
+            let pairs = self.config.neighbour_weight > 0.0;
+            for k in 0..q {
+                let i = if pairs && k % 2 == 1 {
+                    // A random in-bounds neighbour of the previous query.
+                    let prev = (batch.queries[batch.queries.len() - 2] as usize) * cols
+                        + batch.queries[batch.queries.len() - 1] as usize;
+                    let (r, c) = (prev / cols, prev % cols);
+                    loop {
+                        let (dr, dc) = envfield_grid::DIRECTIONS_8[rng.below(8)];
+                        let (nr, nc) = (r as isize + dr, c as isize + dc);
+                        if nr >= 0 && nc >= 0 && (nr as usize) < rows && (nc as usize) < cols {
+                            break nr as usize * cols + nc as usize;
+                        }
+                    }
+                } else {
+                    rng.below(rows * cols)
+                };
                 batch.queries.extend([(i / cols) as f32, (i % cols) as f32]);
                 targets.push(reencode(encoding, s.target[i]));
             }

@@ -5,7 +5,7 @@ use envfield_grid::{Cell2, FieldModel, Grid2, MoveRule, Point2};
 use envfield_mazes::{Dataset, DatasetConfig, GeneratorKind, MazeGenerator, TargetKind};
 use envfield_nets::{
     Activation, Batch, ContextConfig, ConvSpec, FieldNet, GoalConfig, HyperConfig, MlpConfig,
-    ModelConfig, NetsError, PlainConfig, TargetEncoding, TrainConfig, Trainer,
+    ModelConfig, NetsError, PlainConfig, PropagationConfig, TargetEncoding, TrainConfig, Trainer,
 };
 use envfield_plan::{FieldDescent, Planner};
 
@@ -140,6 +140,13 @@ fn all_configs() -> Vec<ModelConfig> {
         }),
         ModelConfig::Context(small_context()),
         ModelConfig::Hyper(small_hyper()),
+        ModelConfig::Context(ContextConfig {
+            propagation: Some(PropagationConfig {
+                q_channels: 3,
+                iterations_per_cell: 0.5,
+            }),
+            ..small_context()
+        }),
     ]
 }
 
@@ -359,4 +366,40 @@ fn same_seed_same_network() {
         a.predict(&grid, Cell2::new(0, 0)).unwrap().values(),
         b.predict(&grid, Cell2::new(0, 0)).unwrap().values()
     );
+}
+
+/// With a neighbour weight, batches hold (cell, neighbour) pairs and training still works.
+#[test]
+fn neighbour_loss_pairs_adjacent_cells() {
+    let data = dataset(8, 4, 2, 5);
+    let cfg = TrainConfig {
+        lr: 1e-3,
+        batch_items: 3,
+        queries_per_item: 10,
+        steps: 3,
+        neighbour_weight: 2.0,
+        checkpoint_every: 0,
+        validate_every: 0,
+        ..TrainConfig::default()
+    };
+    let odd = TrainConfig {
+        queries_per_item: 9,
+        ..cfg.clone()
+    };
+    let net = || FieldNet::new(ModelConfig::Context(small_context()), 3).unwrap();
+    assert!(matches!(
+        Trainer::new(net(), odd),
+        Err(NetsError::InvalidConfig(_))
+    ));
+    let mut trainer = Trainer::new(net(), cfg).unwrap();
+    let (batch, targets) = trainer.sample_batch(&data, 0).unwrap();
+    assert_eq!(targets.len(), 30);
+    for pair in batch.queries.chunks_exact(4) {
+        let (dr, dc) = ((pair[0] - pair[2]).abs(), (pair[1] - pair[3]).abs());
+        assert!(dr <= 1.0 && dc <= 1.0 && dr + dc > 0.0, "{pair:?}");
+    }
+    let summary = trainer
+        .run(std::slice::from_ref(&data), None, None, |_| true)
+        .unwrap();
+    assert!(summary.loss.is_finite());
 }
