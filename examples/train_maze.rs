@@ -90,6 +90,10 @@ struct Args {
     /// Weight of the neighbour-difference loss (0: plain L1). Also applies to a resumed run.
     #[arg(long)]
     neighbour_weight: Option<f64>,
+    /// Stop (with a checkpoint) at this step, before --steps; the learning-rate schedule still
+    /// follows --steps, so a later --resume continues the same run.
+    #[arg(long)]
+    stop_at: Option<u64>,
     /// Checkpoint and validate every N steps.
     #[arg(long, default_value_t = 500)]
     every: u64,
@@ -299,7 +303,7 @@ fn main() -> Result<()> {
             last_val.map_or("-".into(), |v| format!("{v:.4}")),
             p.steps_per_second
         ));
-        true
+        args.stop_at.is_none_or(|stop| p.step < stop)
     })?;
     bar.finish();
     let net = trainer.into_net();

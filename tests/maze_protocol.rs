@@ -274,3 +274,44 @@ fn pairs_naming_missing_mazes_or_walls_are_errors() {
     }];
     assert!(evaluate_pairs(&astar, &mazes, &on_wall, MoveRule::Strict, &mut |_, _| {}).is_err());
 }
+
+/// Lower bounds for the shipped field on every 5th VIN test maze, a few points under its
+/// full-set figures in the README (98.6%, 93.6%, 91.2%) to allow for the subset.
+const FLOOR_8: f64 = 95.0;
+const FLOOR_16: f64 = 88.0;
+const FLOOR_28: f64 = 85.0;
+
+/// The shipped learned field (models/context.safetensors) plans on VIN's test sets under the
+/// `vin` rule about as well as the README says (every 5th maze, so the debug-build test stays
+/// quick; the README's figures are from all 1000 with `maze_nav`).
+#[test]
+fn shipped_field_model_solves_vin_test_sets() {
+    let model = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("models/context.safetensors");
+    if !model.is_file() {
+        eprintln!("skipping: {} not found", model.display());
+        return;
+    }
+    let net = envfield::nets::FieldNet::load(&model).unwrap();
+    let planner = FieldDescent::new(&net, MoveRule::Vin);
+    for (n, floor) in [(8, FLOOR_8), (16, FLOOR_16), (28, FLOOR_28)] {
+        let Some(path) = vin_file(n) else { return };
+        let mazes: Vec<Maze> = envfield::grid::read_mazes(&path)
+            .unwrap()
+            .into_iter()
+            .step_by(5)
+            .collect();
+        let cfg = EvalConfig {
+            rule: MoveRule::Vin,
+            pairs_per_maze: 1,
+            seed: 0,
+        };
+        let report = evaluate(&planner, &mazes, &cfg, &mut |_, _| {}).unwrap();
+        assert_eq!(report.summary.pairs, 200);
+        assert!(
+            report.summary.success_rate >= floor,
+            "vin_test_{n}: {}% < {floor}%",
+            report.summary.success_rate
+        );
+        assert!(report.summary.path_ratio < 1.05, "{}", report.summary.path_ratio);
+    }
+}
