@@ -312,6 +312,10 @@ fn shipped_field_model_solves_vin_test_sets() {
             "vin_test_{n}: {}% < {floor}%",
             report.summary.success_rate
         );
-        assert!(report.summary.path_ratio < 1.05, "{}", report.summary.path_ratio);
+        assert!(
+            report.summary.path_ratio < 1.05,
+            "{}",
+            report.summary.path_ratio
+        );
     }
 }
