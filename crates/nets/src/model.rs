@@ -6,6 +6,7 @@ use crate::layers::{
 };
 use crate::params::{
     to_safetensors, Init, ParamStore, TensorFile, FORMAT, META_CONFIG, META_FORMAT,
+    OPTIMISER_PREFIX,
 };
 use crate::{NetsError, Result};
 use candle_core::{Device, Tensor, Var};
@@ -667,6 +668,10 @@ impl FieldNet {
         self.store.vars()
     }
 
+    pub(crate) fn store(&self) -> &ParamStore {
+        &self.store
+    }
+
     pub(crate) fn param_names(&self) -> &[String] {
         self.store.names()
     }
@@ -997,9 +1002,6 @@ impl FieldNet {
         Ok(())
     }
 }
-
-/// Names of optimiser tensors in checkpoints start with this.
-pub(crate) const OPTIMISER_PREFIX: &str = "optimiser.";
 
 pub(crate) fn read_config(path: &Path, file: &TensorFile) -> Result<ModelConfig> {
     let json = file

@@ -143,8 +143,15 @@ impl AdamW {
         Ok(())
     }
 
-    pub(crate) fn moments(&self) -> (&[Tensor], &[Tensor]) {
-        (&self.m, &self.v)
+    /// The moments named for a checkpoint, `m` then `v` for each of `names` (the
+    /// parameters' names, in the order of the vars this optimiser was made for).
+    pub(crate) fn state_tensors(&self, names: &[String]) -> Vec<(String, Tensor)> {
+        let mut out = Vec::with_capacity(2 * names.len());
+        for (i, name) in names.iter().enumerate() {
+            out.push((moment_name('m', name), self.m[i].clone()));
+            out.push((moment_name('v', name), self.v[i].clone()));
+        }
+        out
     }
 
     pub(crate) fn set_moments(&mut self, m: Vec<Tensor>, v: Vec<Tensor>, step: u64) {
@@ -152,6 +159,16 @@ impl AdamW {
         self.v = v;
         self.step = step;
     }
+}
+
+/// Names of optimiser tensors in checkpoints start with this.
+pub(crate) const OPTIMISER_PREFIX: &str = "optimiser.";
+
+/// The metadata key of a checkpoint's step (absent from plain weight files).
+pub(crate) const META_STEP: &str = "envfield.step";
+
+fn moment_name(kind: char, name: &str) -> String {
+    format!("{OPTIMISER_PREFIX}{kind}.{name}")
 }
 
 /// Metadata keys of an envfield-nets safetensors file.
@@ -223,6 +240,22 @@ impl TensorFile {
             tensors.insert(name, (view.shape().to_vec(), data));
         }
         Ok(Self { metadata, tensors })
+    }
+
+    /// Takes Adam's moments for the parameters of `store` (as written by
+    /// [`AdamW::state_tensors`]), checking their shapes.
+    pub(crate) fn take_moments(
+        &mut self,
+        path: &Path,
+        store: &ParamStore,
+        device: &Device,
+    ) -> Result<(Vec<Tensor>, Vec<Tensor>)> {
+        let (mut m, mut v) = (Vec::new(), Vec::new());
+        for (name, var) in store.names().iter().zip(store.vars()) {
+            m.push(self.take(path, &moment_name('m', name), var.dims(), device)?);
+            v.push(self.take(path, &moment_name('v', name), var.dims(), device)?);
+        }
+        Ok((m, v))
     }
 
     /// Takes tensor `name`, checking its shape.

@@ -1,8 +1,8 @@
 //! Training: L1 on the paper's target encoding, AdamW, seeded batches, atomic checkpoints that
 //! resume exactly.
 
-use crate::model::{read_config, Batch, FieldNet, TargetEncoding, OPTIMISER_PREFIX};
-use crate::params::{AdamW, TensorFile};
+use crate::model::{read_config, Batch, FieldNet, TargetEncoding};
+use crate::params::{AdamW, TensorFile, META_STEP};
 use crate::{NetsError, Result};
 use candle_core::{Device, Tensor};
 use envfield_grid::synth::SplitMix64;
@@ -12,7 +12,6 @@ use std::collections::HashMap;
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-const META_STEP: &str = "envfield.step";
 const META_TRAIN: &str = "envfield.train";
 
 /// How to train. Serialised into every checkpoint.
@@ -215,22 +214,7 @@ impl Trainer {
         .map_err(|e| bad(format!("bad training config: {e}")))?;
         let model = read_config(path, &file)?;
         let mut net = FieldNet::new_on(model, 0, device)?;
-        let mut m = Vec::new();
-        let mut v = Vec::new();
-        for (name, var) in net.param_names().iter().zip(net.vars()) {
-            m.push(file.take(
-                path,
-                &format!("{OPTIMISER_PREFIX}m.{name}"),
-                var.dims(),
-                device,
-            )?);
-            v.push(file.take(
-                path,
-                &format!("{OPTIMISER_PREFIX}v.{name}"),
-                var.dims(),
-                device,
-            )?);
-        }
+        let (m, v) = file.take_moments(path, net.store(), device)?;
         net.take_weights(path, &mut file)?;
         let mut trainer = Self::new(net, config)?;
         trainer.optimiser.set_moments(m, v, step);
@@ -283,12 +267,7 @@ impl Trainer {
     /// # Errors
     /// I/O errors naming the file.
     pub fn save_checkpoint(&self, path: impl AsRef<Path>) -> Result<()> {
-        let (m, v) = self.optimiser.moments();
-        let mut extra = Vec::with_capacity(2 * m.len());
-        for (i, name) in self.net.param_names().iter().enumerate() {
-            extra.push((format!("{OPTIMISER_PREFIX}m.{name}"), m[i].clone()));
-            extra.push((format!("{OPTIMISER_PREFIX}v.{name}"), v[i].clone()));
-        }
+        let extra = self.optimiser.state_tensors(self.net.param_names());
         let mut meta = HashMap::new();
         meta.insert(META_STEP.to_string(), self.step().to_string());
         let train = serde_json::to_string(&self.config).map_err(|e| {

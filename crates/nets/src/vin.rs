@@ -4,6 +4,7 @@
 use crate::layers::{Conv, ConvSpec, IndexCache, Linear};
 use crate::params::{
     to_safetensors, AdamW, Init, ParamStore, TensorFile, FORMAT, META_CONFIG, META_FORMAT,
+    META_STEP,
 };
 use crate::{NetsError, Result};
 use candle_core::{Device, Tensor, D};
@@ -207,12 +208,8 @@ impl Vin {
         .map_err(|e| NetsError::InvalidConfig(e.to_string()))?;
         meta.insert(META_CONFIG.to_string(), cfg);
         if let Some(opt) = optimiser {
-            let (m, v) = opt.moments();
-            for (i, name) in self.store.names().iter().enumerate() {
-                tensors.push((format!("optimiser.m.{name}"), m[i].clone()));
-                tensors.push((format!("optimiser.v.{name}"), v[i].clone()));
-            }
-            meta.insert("envfield.step".into(), opt.step.to_string());
+            tensors.extend(opt.state_tensors(self.store.names()));
+            meta.insert(META_STEP.into(), opt.step.to_string());
         }
         envfield_grid::write_atomic(path, &to_safetensors(&tensors, meta)?)?;
         Ok(())
@@ -241,23 +238,9 @@ impl Vin {
             serde_json::from_str(json).map_err(|e| bad(format!("not a VIN file: {e}")))?;
         let net = Self::new(cfg.config, 0)?;
         let mut state = None;
-        if let Some(step) = file.metadata.get("envfield.step").cloned() {
+        if let Some(step) = file.metadata.get(META_STEP).cloned() {
             let step: u64 = step.parse().map_err(|e| bad(format!("bad step: {e}")))?;
-            let (mut m, mut v) = (Vec::new(), Vec::new());
-            for (name, var) in net.store.names().iter().zip(net.store.vars()) {
-                m.push(file.take(
-                    path,
-                    &format!("optimiser.m.{name}"),
-                    var.dims(),
-                    &net.device,
-                )?);
-                v.push(file.take(
-                    path,
-                    &format!("optimiser.v.{name}"),
-                    var.dims(),
-                    &net.device,
-                )?);
-            }
+            let (m, v) = file.take_moments(path, &net.store, &net.device)?;
             state = Some((m, v, step));
         }
         let mut loaded = Vec::new();
