@@ -1,0 +1,1 @@
+//! Skeleton poses and affordance checks (in progress).

@@ -1,0 +1,183 @@
+//! The bird's-eye floor map of paper section 4.1: a top-down depth image whose deepest pixels
+//! (the floor) are free and the rest obstacles.
+
+use envfield_grid::{Cell2, Grid2};
+use nalgebra::{Point3, Vector3};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Result, SceneError};
+use crate::scene::Scene;
+
+/// How [`floor_map`] renders the scene.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FloorMapConfig {
+    /// Side of a pixel in metres.
+    pub resolution: f32,
+    /// Pixels whose depth is within this of the deepest pixel count as floor (metres).
+    pub floor_tolerance: f32,
+    /// The camera height: rays start here, below a scanned ceiling. `None`: just above the
+    /// scene's top.
+    pub camera_height: Option<f32>,
+}
+
+impl Default for FloorMapConfig {
+    fn default() -> Self {
+        Self {
+            resolution: 0.05,
+            floor_tolerance: 0.02,
+            camera_height: None,
+        }
+    }
+}
+
+/// How map cells relate to the world: cell `(row, col)` covers
+/// `x in origin[0] + [col, col+1) * resolution`, `y in origin[1] + [row, row+1) * resolution`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct MapFrame {
+    /// World `(x, y)` of the map's minimum corner.
+    pub origin: [f32; 2],
+    /// Side of a cell in metres.
+    pub resolution: f32,
+}
+
+impl MapFrame {
+    /// World `(x, y)` of a cell's centre.
+    pub fn center(&self, cell: Cell2) -> [f32; 2] {
+        [
+            self.origin[0] + (cell.col as f32 + 0.5) * self.resolution,
+            self.origin[1] + (cell.row as f32 + 0.5) * self.resolution,
+        ]
+    }
+
+    /// The cell under world `(x, y)`, or `None` outside `rows x cols`.
+    pub fn cell_of(&self, x: f32, y: f32, rows: usize, cols: usize) -> Option<Cell2> {
+        let c = (x - self.origin[0]) / self.resolution;
+        let r = (y - self.origin[1]) / self.resolution;
+        (c >= 0.0 && r >= 0.0 && (c as usize) < cols && (r as usize) < rows)
+            .then(|| Cell2::new(r as usize, c as usize))
+    }
+}
+
+/// A top-down floor map: free cells are floor seen from above.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FloorMap {
+    /// Obstacles: pixels where something stands above the floor, or where no floor is seen.
+    pub grid: Grid2,
+    /// Cells to metres.
+    pub frame: MapFrame,
+    /// The height of the first surface seen from above per cell (row-major), `-inf` where the
+    /// ray met nothing.
+    pub heights: Vec<f32>,
+    /// The floor height found (the lowest surface seen).
+    pub floor_height: f32,
+}
+
+/// Renders the top-down depth image of `scene` over its bounding box and marks the deepest
+/// pixels free. Cost: one ray cast per pixel, in parallel.
+///
+/// # Errors
+/// [`SceneError::InvalidInput`] for an empty scene, a non-positive resolution or tolerance, a
+/// map of more than 2^28 pixels, or a scene where no ray meets anything.
+pub fn floor_map(scene: &Scene, config: &FloorMapConfig) -> Result<FloorMap> {
+    let aabb = scene
+        .aabb()
+        .ok_or_else(|| SceneError::InvalidInput("the scene is empty".into()))?;
+    let res = config.resolution;
+    let tolerance_ok = config.floor_tolerance.is_finite() && config.floor_tolerance >= 0.0;
+    if !(res.is_finite() && res > 0.0 && tolerance_ok) {
+        return Err(SceneError::InvalidInput(format!(
+            "floor map resolution must be > 0 and tolerance >= 0, got {} and {}",
+            res, config.floor_tolerance
+        )));
+    }
+    let cols = ((aabb.maxs.x - aabb.mins.x) / res).ceil().max(1.0) as usize;
+    let rows = ((aabb.maxs.y - aabb.mins.y) / res).ceil().max(1.0) as usize;
+    if rows.saturating_mul(cols) > 1 << 28 {
+        return Err(SceneError::InvalidInput(format!(
+            "a {rows} x {cols} floor map is too large; use a coarser resolution"
+        )));
+    }
+    let frame = MapFrame {
+        origin: [aabb.mins.x, aabb.mins.y],
+        resolution: res,
+    };
+    let top = config.camera_height.unwrap_or(aabb.maxs.z + 0.1);
+    let range = top - aabb.mins.z + 0.1;
+    let down = -Vector3::z();
+    let heights: Vec<f32> = (0..rows * cols)
+        .into_par_iter()
+        .with_min_len(256)
+        .map(|i| {
+            let [x, y] = frame.center(Cell2::new(i / cols, i % cols));
+            match scene.cast_ray(&Point3::new(x, y, top), &down, range) {
+                Ok(Some(hit)) => top - hit.distance,
+                _ => f32::NEG_INFINITY,
+            }
+        })
+        .collect();
+    let floor_height = heights
+        .iter()
+        .copied()
+        .filter(|h| h.is_finite())
+        .fold(f32::INFINITY, f32::min);
+    if !floor_height.is_finite() {
+        return Err(SceneError::InvalidInput(
+            "no ray from above met the scene".into(),
+        ));
+    }
+    let obstacles = heights
+        .iter()
+        .map(|&h| !(h.is_finite() && h <= floor_height + config.floor_tolerance))
+        .collect();
+    Ok(FloorMap {
+        grid: Grid2::from_obstacles(rows, cols, obstacles)?,
+        frame,
+        heights,
+        floor_height,
+    })
+}
+
+/// Labels the 4-connected components of free cells: `(labels, sizes)` where `labels[i]` is
+/// the component of cell `i` (`usize::MAX` for obstacles) and `sizes[k]` the cells of
+/// component `k`. O(cells).
+pub fn free_components(grid: &Grid2) -> (Vec<usize>, Vec<usize>) {
+    let (rows, cols) = (grid.rows(), grid.cols());
+    let obstacles = grid.obstacles();
+    let mut labels = vec![usize::MAX; obstacles.len()];
+    let mut sizes = Vec::new();
+    let mut stack = Vec::new();
+    for start in 0..obstacles.len() {
+        if obstacles[start] || labels[start] != usize::MAX {
+            continue;
+        }
+        let k = sizes.len();
+        let mut size = 0;
+        labels[start] = k;
+        stack.push(start);
+        while let Some(i) = stack.pop() {
+            size += 1;
+            let (r, c) = (i / cols, i % cols);
+            let mut visit = |j: usize| {
+                if !obstacles[j] && labels[j] == usize::MAX {
+                    labels[j] = k;
+                    stack.push(j);
+                }
+            };
+            if r > 0 {
+                visit(i - cols);
+            }
+            if r + 1 < rows {
+                visit(i + cols);
+            }
+            if c > 0 {
+                visit(i - 1);
+            }
+            if c + 1 < cols {
+                visit(i + 1);
+            }
+        }
+        sizes.push(size);
+    }
+    (labels, sizes)
+}

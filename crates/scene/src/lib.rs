@@ -1,0 +1,49 @@
+//! Signed-distance 3D scenes for environment fields in indoor scenes (paper section 4 and
+//! appendix A.2-A.3), built on parry3d and nalgebra. Metres, z up.
+//!
+//! - [`Scene`]: objects ([`SceneObject`]) made of [`Part`]s, primitives ([`Primitive`]:
+//!   boxes, balls, capsules, cylinders) or triangle meshes, with the signed distance at any
+//!   point (negative inside), the nearest surface point and normal ([`Scene::closest`]), ray
+//!   casts and batched queries in parallel ([`Scene::signed_distances`]).
+//! - [`TriangleMesh`]: OBJ and PLY input and output (a scanned room is one mesh,
+//!   [`Scene::from_mesh`]); point clouds and paths export with [`write_point_cloud`] and
+//!   [`write_polyline_obj`].
+//! - [`generate_room`]: seeded furnished rooms (beds, sofas, chairs, tables, desks, cabinets)
+//!   whose free floor stays connected.
+//! - [`sample_surface`] (the point cloud a scene encoder reads), [`voxelize`] into a
+//!   [`envfield_grid::Grid3`], and [`floor_map`]: the bird's-eye map of section 4.1, a top-down
+//!   depth image whose deepest pixels (the floor) are free.
+//!
+//! ```
+//! use envfield_scene::{floor_map, generate_room, FloorMapConfig, RoomConfig};
+//! use nalgebra::Point3;
+//!
+//! let room = generate_room(&RoomConfig::default(), 7)?;
+//! // One metre above the floor in the middle of the room is free space...
+//! let above = Point3::new(room.size[0] / 2.0, room.size[1] / 2.0, 1.0);
+//! assert!(room.scene.signed_distance(&above)? > 0.0);
+//! // ...and just below the floor's top is inside the floor.
+//! let below = Point3::new(room.size[0] / 2.0, room.size[1] / 2.0, -0.02);
+//! assert!(room.scene.signed_distance(&below)? < 0.0);
+//! let map = floor_map(&room.scene, &FloorMapConfig::default())?;
+//! assert!(map.grid.free_count() > 0);
+//! # Ok::<(), envfield_scene::SceneError>(())
+//! ```
+
+mod error;
+mod floor;
+mod mesh;
+mod ply;
+mod room;
+mod sample;
+mod scene;
+
+pub use error::{Result, SceneError};
+pub use floor::{floor_map, free_components, FloorMap, FloorMapConfig, MapFrame};
+pub use mesh::{write_point_cloud, write_polyline_obj, TriangleMesh};
+pub use room::{generate_room, Furniture, Room, RoomConfig};
+pub use sample::{sample_surface, voxelize, VoxelFrame};
+pub use scene::{ObjectKind, Part, Primitive, RayHit, Scene, SceneObject, SurfacePoint};
+
+pub use nalgebra;
+pub use parry3d;

@@ -1,0 +1,340 @@
+//! Triangle meshes and their OBJ / PLY input and output.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use nalgebra::Point3;
+
+use crate::error::{Result, SceneError};
+
+/// A triangle soup with shared vertices: what OBJ and PLY files hold.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TriangleMesh {
+    /// Vertex positions in metres.
+    pub vertices: Vec<Point3<f32>>,
+    /// Counter-clockwise (seen from outside) vertex indices of each triangle.
+    pub triangles: Vec<[u32; 3]>,
+}
+
+impl TriangleMesh {
+    /// An axis-aligned cube of side `side` centred at the origin, normals outwards.
+    pub fn cube(side: f32) -> Self {
+        let h = side / 2.0;
+        let vertices = (0..8)
+            .map(|i| {
+                Point3::new(
+                    if i & 1 == 0 { -h } else { h },
+                    if i & 2 == 0 { -h } else { h },
+                    if i & 4 == 0 { -h } else { h },
+                )
+            })
+            .collect();
+        let triangles = vec![
+            [0, 2, 1],
+            [1, 2, 3], // z = -h
+            [4, 5, 6],
+            [5, 7, 6], // z = +h
+            [0, 1, 4],
+            [1, 5, 4], // y = -h
+            [2, 6, 3],
+            [3, 6, 7], // y = +h
+            [0, 4, 2],
+            [2, 4, 6], // x = -h
+            [1, 3, 5],
+            [3, 7, 5], // x = +h
+        ];
+        Self {
+            vertices,
+            triangles,
+        }
+    }
+
+    /// Appends another mesh (its indices shifted).
+    pub fn append(&mut self, other: &TriangleMesh) {
+        let base = self.vertices.len() as u32;
+        self.vertices.extend_from_slice(&other.vertices);
+        self.triangles.extend(
+            other
+                .triangles
+                .iter()
+                .map(|t| [t[0] + base, t[1] + base, t[2] + base]),
+        );
+    }
+
+    /// Total surface area in square metres.
+    pub fn area(&self) -> f32 {
+        self.triangles.iter().map(|t| self.triangle_area(t)).sum()
+    }
+
+    pub(crate) fn triangle_area(&self, t: &[u32; 3]) -> f32 {
+        let [a, b, c] = t.map(|i| self.vertices[i as usize]);
+        (b - a).cross(&(c - a)).norm() / 2.0
+    }
+
+    /// Checks that there is a triangle, every vertex is finite and every index in range.
+    ///
+    /// # Errors
+    /// [`SceneError::EmptyMesh`] or [`SceneError::InvalidGeometry`] naming the vertex or triangle.
+    pub fn validate(&self, what: &str) -> Result<()> {
+        if self.triangles.is_empty() {
+            return Err(SceneError::EmptyMesh(what.to_string()));
+        }
+        if let Some(i) = self
+            .vertices
+            .iter()
+            .position(|v| !v.iter().all(|c| c.is_finite()))
+        {
+            return Err(SceneError::InvalidGeometry(format!(
+                "{what}: vertex {i} is not finite"
+            )));
+        }
+        let n = self.vertices.len() as u32;
+        if let Some(i) = self
+            .triangles
+            .iter()
+            .position(|t| t.iter().any(|&v| v >= n))
+        {
+            return Err(SceneError::InvalidGeometry(format!(
+                "{what}: triangle {i} {:?} refers to a vertex beyond the {n} vertices",
+                self.triangles[i]
+            )));
+        }
+        Ok(())
+    }
+
+    /// Reads an OBJ or PLY file, chosen by the extension.
+    ///
+    /// # Errors
+    /// [`SceneError::InvalidInput`] for another extension, and the errors of
+    /// [`TriangleMesh::read_obj`] / [`TriangleMesh::read_ply`].
+    pub fn read(path: impl AsRef<Path>) -> Result<Self> {
+        let path = path.as_ref();
+        match extension(path).as_deref() {
+            Some("obj") => Self::read_obj(path),
+            Some("ply") => Self::read_ply(path),
+            _ => Err(SceneError::InvalidInput(format!(
+                "{}: expected a .obj or .ply mesh",
+                path.display()
+            ))),
+        }
+    }
+
+    /// Writes an OBJ or PLY file (chosen by the extension), atomically.
+    ///
+    /// # Errors
+    /// [`SceneError::InvalidInput`] for another extension; I/O errors.
+    pub fn write(&self, path: impl AsRef<Path>) -> Result<()> {
+        let path = path.as_ref();
+        match extension(path).as_deref() {
+            Some("obj") => self.write_obj(path),
+            Some("ply") => self.write_ply(path),
+            _ => Err(SceneError::InvalidInput(format!(
+                "{}: expected a .obj or .ply mesh",
+                path.display()
+            ))),
+        }
+    }
+
+    /// Reads the vertices (`v`) and faces (`f`, polygons fanned into triangles, `v/vt/vn` and
+    /// negative indices accepted) of a Wavefront OBJ file; other statements are ignored.
+    ///
+    /// # Errors
+    /// [`SceneError::Parse`] naming the line of a malformed vertex or face, or a face index out
+    /// of range; [`SceneError::EmptyMesh`] without faces; [`SceneError::Io`].
+    pub fn read_obj(path: impl AsRef<Path>) -> Result<Self> {
+        let path = path.as_ref();
+        let text = std::fs::read_to_string(path).map_err(|source| io(path, source))?;
+        Self::parse_obj(&text, path)
+    }
+
+    fn parse_obj(text: &str, path: &Path) -> Result<Self> {
+        let err = |line: usize, reason: String| SceneError::Parse {
+            path: path.to_path_buf(),
+            line,
+            reason,
+        };
+        let mut mesh = TriangleMesh::default();
+        for (n, line) in text.lines().enumerate() {
+            let n = n + 1;
+            let mut words = line.split_whitespace();
+            match words.next() {
+                Some("v") => {
+                    let c: Vec<f32> = words
+                        .take(3)
+                        .map(|w| w.parse::<f32>())
+                        .collect::<std::result::Result<_, _>>()
+                        .map_err(|e| err(n, format!("bad vertex coordinate: {e}")))?;
+                    if c.len() != 3 || !c.iter().all(|v| v.is_finite()) {
+                        return Err(err(
+                            n,
+                            format!("a vertex needs 3 finite coordinates: `{line}`"),
+                        ));
+                    }
+                    mesh.vertices.push(Point3::new(c[0], c[1], c[2]));
+                }
+                Some("f") => {
+                    let count = mesh.vertices.len() as i64;
+                    let idx: Vec<u32> = words
+                        .map(|w| {
+                            let first = w.split('/').next().unwrap_or("");
+                            let i: i64 = first
+                                .parse()
+                                .map_err(|_| err(n, format!("bad face index `{w}`")))?;
+                            let i = if i < 0 { count + i } else { i - 1 };
+                            if i < 0 || i >= count {
+                                return Err(err(
+                                    n,
+                                    format!("face index `{w}` is outside the {count} vertices read so far"),
+                                ));
+                            }
+                            Ok(i as u32)
+                        })
+                        .collect::<Result<_>>()?;
+                    if idx.len() < 3 {
+                        return Err(err(
+                            n,
+                            format!("a face needs at least 3 vertices: `{line}`"),
+                        ));
+                    }
+                    for k in 1..idx.len() - 1 {
+                        mesh.triangles.push([idx[0], idx[k], idx[k + 1]]);
+                    }
+                }
+                _ => {}
+            }
+        }
+        mesh.validate(&path.display().to_string())?;
+        Ok(mesh)
+    }
+
+    /// Reads a PLY file: ASCII or binary little/big endian, a `vertex` element with float or
+    /// double `x`, `y`, `z` (other properties skipped), and a `face` element whose first list
+    /// property holds the vertex indices (polygons fanned into triangles).
+    ///
+    /// # Errors
+    /// [`SceneError::Parse`] for a malformed header or body (line 0 in binary bodies);
+    /// [`SceneError::EmptyMesh`] without faces; [`SceneError::Io`].
+    pub fn read_ply(path: impl AsRef<Path>) -> Result<Self> {
+        let path = path.as_ref();
+        let bytes = std::fs::read(path).map_err(|source| io(path, source))?;
+        crate::ply::parse(&bytes, path)
+    }
+
+    /// Writes a Wavefront OBJ file atomically.
+    ///
+    /// # Errors
+    /// I/O errors.
+    pub fn write_obj(&self, path: impl AsRef<Path>) -> Result<()> {
+        let mut s = String::from("# envfield-scene\n");
+        for v in &self.vertices {
+            let _ = writeln!(s, "v {} {} {}", v.x, v.y, v.z);
+        }
+        for t in &self.triangles {
+            let _ = writeln!(s, "f {} {} {}", t[0] + 1, t[1] + 1, t[2] + 1);
+        }
+        envfield_grid::write_atomic(path, s.as_bytes())?;
+        Ok(())
+    }
+
+    /// Writes a binary little-endian PLY file atomically.
+    ///
+    /// # Errors
+    /// I/O errors.
+    pub fn write_ply(&self, path: impl AsRef<Path>) -> Result<()> {
+        let mut out = format!(
+            "ply\nformat binary_little_endian 1.0\ncomment envfield-scene\nelement vertex {}\n\
+             property float x\nproperty float y\nproperty float z\nelement face {}\n\
+             property list uchar int vertex_indices\nend_header\n",
+            self.vertices.len(),
+            self.triangles.len()
+        )
+        .into_bytes();
+        for v in &self.vertices {
+            for c in v.iter() {
+                out.extend_from_slice(&c.to_le_bytes());
+            }
+        }
+        for t in &self.triangles {
+            out.push(3);
+            for &i in t {
+                out.extend_from_slice(&(i as i32).to_le_bytes());
+            }
+        }
+        envfield_grid::write_atomic(path, &out)?;
+        Ok(())
+    }
+}
+
+/// Writes points (a sampled point cloud) as an ASCII PLY file, atomically.
+///
+/// # Errors
+/// I/O errors.
+pub fn write_point_cloud(points: &[Point3<f32>], path: impl AsRef<Path>) -> Result<()> {
+    let mut s = format!(
+        "ply\nformat ascii 1.0\ncomment envfield-scene points\nelement vertex {}\n\
+         property float x\nproperty float y\nproperty float z\nend_header\n",
+        points.len()
+    );
+    for p in points {
+        let _ = writeln!(s, "{} {} {}", p.x, p.y, p.z);
+    }
+    envfield_grid::write_atomic(path, s.as_bytes())?;
+    Ok(())
+}
+
+/// Writes a path (a polyline through `points`) as an OBJ file with one `l` element, atomically.
+///
+/// # Errors
+/// [`SceneError::InvalidInput`] for fewer than 2 points; I/O errors.
+pub fn write_polyline_obj(points: &[Point3<f32>], path: impl AsRef<Path>) -> Result<()> {
+    if points.len() < 2 {
+        return Err(SceneError::InvalidInput(format!(
+            "a polyline needs at least 2 points, got {}",
+            points.len()
+        )));
+    }
+    let mut s = String::from("# envfield-scene path\n");
+    for p in points {
+        let _ = writeln!(s, "v {} {} {}", p.x, p.y, p.z);
+    }
+    s.push('l');
+    for i in 1..=points.len() {
+        let _ = write!(s, " {i}");
+    }
+    s.push('\n');
+    envfield_grid::write_atomic(path, s.as_bytes())?;
+    Ok(())
+}
+
+fn extension(path: &Path) -> Option<String> {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.to_ascii_lowercase())
+}
+
+pub(crate) fn io(path: &Path, source: std::io::Error) -> SceneError {
+    SceneError::Io {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn obj_faces_are_fanned_and_checked() {
+        let p = Path::new("t.obj");
+        let m =
+            TriangleMesh::parse_obj("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1/1 2/2 3/3 -1\n", p)
+                .unwrap();
+        assert_eq!(m.triangles, vec![[0, 1, 2], [0, 2, 3]]);
+        let e = TriangleMesh::parse_obj("v 0 0 0\nv 1 0 0\nf 1 2 3\n", p).unwrap_err();
+        assert!(e.to_string().contains("line 3"), "{e}");
+        let e = TriangleMesh::parse_obj("v 0 0 nan\n", p).unwrap_err();
+        assert!(e.to_string().contains("line 1"), "{e}");
+        let e = TriangleMesh::parse_obj("# nothing\n", p).unwrap_err();
+        assert!(matches!(e, SceneError::EmptyMesh(_)), "{e}");
+    }
+}
