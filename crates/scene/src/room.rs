@@ -56,12 +56,15 @@ impl RoomConfig {
         let positive = [self.wall_height, self.wall_thickness, self.door_width]
             .iter()
             .all(|v| v.is_finite() && *v > 0.0);
-        let clearance_ok = self.clearance.is_finite() && self.clearance >= 0.3;
-        if !(ok(self.width, 2.5) && ok(self.depth, 2.5) && positive && clearance_ok)
-            || !(1..=4).contains(&self.doors)
-            || self.furniture[0] > self.furniture[1]
-            || self.door_width > self.width[0].min(self.depth[0]) - 0.4
-        {
+        let valid = ok(self.width, 2.5)
+            && ok(self.depth, 2.5)
+            && positive
+            && self.clearance.is_finite()
+            && self.clearance >= 0.3
+            && (1..=4).contains(&self.doors)
+            && self.furniture[0] <= self.furniture[1]
+            && self.door_width <= self.width[0].min(self.depth[0]) - 0.4;
+        if !valid {
             return Err(SceneError::InvalidInput(format!(
                 "room config: sizes >= 2.5 m with min <= max, positive wall and door sizes, a door \
                  narrower than a wall, clearance >= 0.3 m and 1-4 doors (got {self:?})"
