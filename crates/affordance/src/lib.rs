@@ -1,1 +1,46 @@
-//! Skeleton poses and affordance checks (in progress).
+//! Human poses in 3D scenes: the SMPL 22-joint skeleton, pose sequences, procedural motions,
+//! and the affordance checks of paper section 4.2 and appendix A.2 (a pose is *supported*
+//! when its support joints rest on a surface, *collision-free* when no other joint is inside
+//! geometry, *valid* when both hold).
+//!
+//! - [`Joint`], [`Pose`], [`PoseSequence`] (JSON in and out), [`Support`], [`Activity`].
+//! - Procedural, seeded motions so nothing needs motion capture: [`walk`], [`sit_down`],
+//!   [`get_up`], [`lie_down`], [`standing_pose`]. Bodies face +x, metres, z up.
+//! - [`check_pose`] / [`check_sequence`] against an [`envfield_scene::Scene`].
+//! - [`align_to_trajectory`] and [`align_in_scene`] (with the +-6 degree search the paper uses
+//!   for getting up); [`PoseSequence::step_length`] for the 3D planner's step.
+//!
+//! ```
+//! use envfield_affordance::{check_pose, standing_pose, AffordanceConfig, Support};
+//! use envfield_scene::{generate_room, RoomConfig};
+//! use nalgebra::Vector3;
+//!
+//! let room = generate_room(&RoomConfig::default(), 3)?;
+//! // Stand on a free cell of the room's bird's-eye floor map.
+//! let map = envfield_scene::floor_map(&room.scene, &Default::default())?;
+//! let cell = map.grid.free_cells().nth(map.grid.free_count() / 2).unwrap();
+//! let [x, y] = map.frame.center(cell);
+//! let pose = standing_pose().translated(&Vector3::new(x, y, 0.0));
+//! let report = check_pose(&room.scene, &pose, Support::Standing, &AffordanceConfig::default())?;
+//! assert!(report.supported);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+mod align;
+mod check;
+mod error;
+mod motion;
+mod skeleton;
+
+pub use align::{align_in_scene, align_to_trajectory, AlignConfig};
+pub use check::{check_pose, check_sequence, AffordanceConfig, AffordanceReport};
+pub use error::{AffordanceError, Result};
+pub use motion::{
+    get_up, lie_down, sit_down, standing_pose, walk, LieConfig, SitConfig, WalkConfig,
+};
+pub use skeleton::{Activity, Joint, Pose, PoseSequence, Support, JOINT_COUNT};
+
+/// A uniform float in `[0, 1)`.
+pub(crate) fn unit(rng: &mut envfield_grid::synth::SplitMix64) -> f32 {
+    (rng.next_u64() >> 40) as f32 / (1u64 << 24) as f32
+}

@@ -1,0 +1,149 @@
+//! Support and collision checks of poses against a scene (paper section 4.2, "path
+//! optimization by affordance").
+
+use envfield_scene::Scene;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::error::{AffordanceError, Result};
+use crate::skeleton::{Joint, Pose, PoseSequence, Support, JOINT_COUNT};
+
+/// Tolerances of the affordance checks, in metres.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct AffordanceConfig {
+    /// A support joint counts as resting on a surface when its signed distance is at most
+    /// this. Skeleton joints sit inside the body (SMPL's hips and pelvis are 5-10 cm above
+    /// the skin a seat touches), so the default is 0.12.
+    pub contact_tolerance: f32,
+    /// A support joint deeper than this inside geometry is sunk, not supported.
+    pub max_penetration: f32,
+    /// Any other joint collides when its signed distance is below `-collision_margin`.
+    pub collision_margin: f32,
+}
+
+impl Default for AffordanceConfig {
+    fn default() -> Self {
+        Self {
+            contact_tolerance: 0.12,
+            max_penetration: 0.10,
+            collision_margin: 0.0,
+        }
+    }
+}
+
+impl AffordanceConfig {
+    fn validate(&self) -> Result<()> {
+        let ok = |v: f32| v.is_finite() && v >= 0.0;
+        if ok(self.contact_tolerance) && ok(self.max_penetration) && ok(self.collision_margin) {
+            Ok(())
+        } else {
+            Err(AffordanceError::InvalidInput(format!(
+                "affordance tolerances must be finite and >= 0, got {self:?}"
+            )))
+        }
+    }
+}
+
+/// The outcome of checking one pose.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AffordanceReport {
+    /// The support checked.
+    pub support: Support,
+    /// Signed distance of every joint (SMPL order).
+    pub distances: [f32; JOINT_COUNT],
+    /// Support joints resting on a surface.
+    pub supported_joints: usize,
+    /// Non-support joints inside geometry.
+    pub colliding_joints: usize,
+    /// The support holds (standing: at least one foot; otherwise every support joint).
+    pub supported: bool,
+    /// No non-support joint is inside geometry.
+    pub collision_free: bool,
+}
+
+impl AffordanceReport {
+    /// Supported and collision-free.
+    pub fn valid(&self) -> bool {
+        self.supported && self.collision_free
+    }
+
+    /// Supported support joints plus collision-free other joints: the score the alignment
+    /// search maximises.
+    pub fn good_joints(&self) -> usize {
+        let others = JOINT_COUNT - self.support.joints().len();
+        self.supported_joints + others - self.colliding_joints
+    }
+}
+
+/// Checks one pose: 22 signed-distance queries. Only joints are tested, as in the paper, so
+/// geometry thinner than the gap between two joints (a 4 cm table top between knee and hip)
+/// can pass between them unseen.
+///
+/// # Errors
+/// [`AffordanceError::InvalidInput`] for a non-finite joint or bad tolerances.
+pub fn check_pose(
+    scene: &Scene,
+    pose: &Pose,
+    support: Support,
+    config: &AffordanceConfig,
+) -> Result<AffordanceReport> {
+    config.validate()?;
+    pose.validate()?;
+    let mut distances = [0.0; JOINT_COUNT];
+    for (d, p) in distances.iter_mut().zip(&pose.joints) {
+        *d = scene.signed_distance(p)?;
+    }
+    Ok(report(distances, support, config))
+}
+
+fn report(
+    distances: [f32; JOINT_COUNT],
+    support: Support,
+    config: &AffordanceConfig,
+) -> AffordanceReport {
+    let support_joints = support.joints();
+    let rests = |d: f32| d <= config.contact_tolerance && d >= -config.max_penetration;
+    let supported_joints = support_joints
+        .iter()
+        .filter(|j| rests(distances[j.index()]))
+        .count();
+    let colliding_joints = Joint::ALL
+        .iter()
+        .filter(|j| !support_joints.contains(j))
+        .filter(|j| distances[j.index()] < -config.collision_margin)
+        .count();
+    let supported = if support.any_joint_suffices() {
+        supported_joints > 0
+    } else {
+        supported_joints == support_joints.len()
+    };
+    AffordanceReport {
+        support,
+        distances,
+        supported_joints,
+        colliding_joints,
+        supported,
+        collision_free: colliding_joints == 0,
+    }
+}
+
+/// Checks every frame of a sequence against its own support, in parallel.
+///
+/// # Errors
+/// As [`check_pose`], naming the frame.
+pub fn check_sequence(
+    scene: &Scene,
+    sequence: &PoseSequence,
+    config: &AffordanceConfig,
+) -> Result<Vec<AffordanceReport>> {
+    sequence
+        .frames
+        .par_iter()
+        .zip(&sequence.supports)
+        .enumerate()
+        .map(|(i, (pose, support))| {
+            check_pose(scene, pose, *support, config)
+                .map_err(|e| AffordanceError::InvalidInput(format!("frame {i}: {e}")))
+        })
+        .collect()
+}

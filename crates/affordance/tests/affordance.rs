@@ -1,0 +1,332 @@
+//! Affordance checks, procedural motions, JSON and alignment on a hand-built room.
+
+use std::f32::consts::FRAC_PI_2;
+
+use approx::assert_relative_eq;
+use envfield_affordance::{
+    align_in_scene, align_to_trajectory, check_pose, check_sequence, get_up, lie_down, sit_down,
+    standing_pose, walk, AffordanceConfig, AlignConfig, Joint, LieConfig, PoseSequence, SitConfig,
+    Support, WalkConfig,
+};
+use envfield_scene::{ObjectKind, Primitive, Scene, SceneObject};
+use nalgebra::{Isometry3, Point3, Vector3};
+
+fn at(x: f32, y: f32, z: f32) -> Isometry3<f32> {
+    Isometry3::translation(x, y, z)
+}
+
+/// A 10 x 10 m floor (top at z = 0), a chair at (2, 2) facing +x, a table at (5, 5) (top at
+/// 0.71-0.75 m) and a bed at (8, 5) (mattress top at 0.5 m, 2 m long along x).
+fn room() -> Scene {
+    let mut s = Scene::new();
+    let mut add = |name: &str, kind, parts: &[(Primitive, Isometry3<f32>)]| {
+        let mut o = SceneObject::new(name, kind);
+        for &(p, pose) in parts {
+            o = o.with(p, pose).unwrap();
+        }
+        s.add(o).unwrap();
+    };
+    add(
+        "floor",
+        ObjectKind::Floor,
+        &[(Primitive::cuboid([10.0, 10.0, 0.1]), at(5.0, 5.0, -0.05))],
+    );
+    let leg = |x, y, h: f32| {
+        (
+            Primitive::Cylinder {
+                half_height: h / 2.0,
+                radius: 0.02,
+            },
+            at(x, y, h / 2.0),
+        )
+    };
+    add(
+        "chair",
+        ObjectKind::Chair,
+        &[
+            (Primitive::cuboid([0.48, 0.46, 0.03]), at(2.0, 2.0, 0.435)),
+            (Primitive::cuboid([0.04, 0.46, 0.45]), at(1.78, 2.0, 0.675)),
+            leg(1.79, 1.8, 0.42),
+            leg(2.21, 1.8, 0.42),
+            leg(1.79, 2.2, 0.42),
+            leg(2.21, 2.2, 0.42),
+        ],
+    );
+    add(
+        "table",
+        ObjectKind::Table,
+        &[
+            (Primitive::cuboid([1.2, 0.8, 0.04]), at(5.0, 5.0, 0.73)),
+            leg(4.45, 4.65, 0.71),
+            leg(5.55, 4.65, 0.71),
+            leg(4.45, 5.35, 0.71),
+            leg(5.55, 5.35, 0.71),
+        ],
+    );
+    add(
+        "bed",
+        ObjectKind::Bed,
+        &[
+            (Primitive::cuboid([2.0, 1.6, 0.5]), at(8.0, 5.0, 0.25)),
+            (Primitive::cuboid([0.08, 1.6, 1.0]), at(6.96, 5.0, 0.5)),
+        ],
+    );
+    s
+}
+
+fn cfg() -> AffordanceConfig {
+    AffordanceConfig::default()
+}
+
+#[test]
+fn standing_on_the_floor_is_valid_and_sunk_into_a_table_is_not() {
+    let scene = room();
+    let pose = standing_pose().translated(&Vector3::new(3.0, 7.0, 0.0));
+    let r = check_pose(&scene, &pose, Support::Standing, &cfg()).unwrap();
+    assert!(r.supported && r.collision_free && r.valid(), "{r:?}");
+    assert_eq!(r.good_joints(), 22);
+    // The same pose at the table, lowered so the pelvis is in the table top.
+    let drop = pose.torso().z - 0.73;
+    let sunk = pose.translated(&Vector3::new(2.0, -2.0, -drop));
+    let r = check_pose(&scene, &sunk, Support::Standing, &cfg()).unwrap();
+    assert!(!r.collision_free, "{r:?}");
+    assert!(r.distances[Joint::Pelvis.index()] < 0.0);
+    // Joints, not bones, are checked (as in the paper): standing under the table, the 4 cm
+    // top passes between the knees (0.5 m) and the hips (0.9 m) unseen.
+    let under = pose.translated(&Vector3::new(2.0, -2.0, 0.0));
+    assert!(
+        check_pose(&scene, &under, Support::Standing, &cfg())
+            .unwrap()
+            .collision_free
+    );
+    // Floating 30 cm above the floor is not supported.
+    let floating = pose.translated(&Vector3::new(0.0, 0.0, 0.3));
+    assert!(
+        !check_pose(&scene, &floating, Support::Standing, &cfg())
+            .unwrap()
+            .supported
+    );
+}
+
+#[test]
+fn sitting_on_the_chair_is_supported_and_in_mid_air_is_not() {
+    let scene = room();
+    let sit = sit_down(&SitConfig::default()).unwrap();
+    let seated = sit.frames.last().unwrap();
+    assert_eq!(*sit.supports.last().unwrap(), Support::Sitting);
+    // The chair faces +x, as the body does; its seat centre is (2.0, 2.0) at 0.45 m.
+    let on_chair = seated.translated(&Vector3::new(2.0, 2.0, 0.0));
+    let r = check_pose(&scene, &on_chair, Support::Sitting, &cfg()).unwrap();
+    assert!(r.supported, "{r:?}");
+    assert!(r.collision_free, "{r:?}");
+    let in_air = on_chair.translated(&Vector3::new(0.0, 0.0, 0.5));
+    let r = check_pose(&scene, &in_air, Support::Sitting, &cfg()).unwrap();
+    assert!(!r.supported, "{r:?}");
+    // The whole motion, played onto the chair, keeps every frame valid.
+    let played = align_to_trajectory(
+        &sit,
+        &sit.frames
+            .iter()
+            .map(|f| f.torso() + Vector3::new(2.0, 2.0, 0.0))
+            .collect::<Vec<_>>(),
+        false,
+    )
+    .unwrap();
+    let reports = check_sequence(&scene, &played, &cfg()).unwrap();
+    let bad: Vec<_> = reports
+        .iter()
+        .enumerate()
+        .filter(|(_, r)| !r.valid())
+        .map(|(i, _)| i)
+        .collect();
+    assert!(bad.is_empty(), "invalid frames {bad:?}");
+}
+
+#[test]
+fn lying_down_on_the_bed_ends_supported_on_the_back() {
+    let scene = room();
+    let lie = lie_down(&LieConfig::default()).unwrap();
+    // Sit on the bed's foot end (x = 9.0, the bed spans 7.0-9.0), facing +x away from the
+    // headboard, then lie back towards it.
+    let placed: Vec<_> = lie
+        .frames
+        .iter()
+        .map(|f| f.translated(&Vector3::new(8.9, 5.0, 0.0)))
+        .collect();
+    let last = placed.last().unwrap();
+    let r = check_pose(&scene, last, Support::Lying, &cfg()).unwrap();
+    assert!(r.valid(), "{r:?}");
+    assert!(last.joint(Joint::Head).x < 8.0 && last.joint(Joint::Head).x > 7.0);
+    let first = check_pose(&scene, &placed[0], Support::Sitting, &cfg()).unwrap();
+    assert!(first.supported, "{first:?}");
+}
+
+#[test]
+fn walking_keeps_bones_feet_and_step_length_plausible() {
+    let config = WalkConfig {
+        cycles: 2,
+        ..WalkConfig::default()
+    };
+    let w = walk(&config, 9).unwrap();
+    assert_eq!(w, walk(&config, 9).unwrap(), "seeded");
+    assert_ne!(w, walk(&config, 10).unwrap());
+    let scene = room();
+    for (i, f) in w.frames.iter().enumerate() {
+        for (a, b, len) in [
+            (Joint::LeftHip, Joint::LeftKnee, 0.40),
+            (Joint::RightKnee, Joint::RightAnkle, 0.42),
+            (Joint::LeftShoulder, Joint::LeftElbow, 0.27),
+        ] {
+            assert_relative_eq!(
+                nalgebra::distance(&f.joint(a), &f.joint(b)),
+                len,
+                epsilon = 1e-4
+            );
+        }
+        let lowest = f
+            .joint(Joint::LeftAnkle)
+            .z
+            .min(f.joint(Joint::RightAnkle).z);
+        assert_relative_eq!(lowest, 0.08, epsilon = 1e-4);
+        let placed = f.translated(&Vector3::new(1.0, 8.0, 0.0));
+        let r = check_pose(&scene, &placed, Support::Standing, &cfg()).unwrap();
+        assert!(r.valid(), "frame {i}: {r:?}");
+    }
+    // The torso advances at step length x cadence: between 0.65 and 1.45 m/s with +-10%.
+    let speed = w.step_length() * w.fps;
+    assert!(
+        (0.65 * 1.8 * 0.8..0.65 * 1.8 * 1.22).contains(&speed),
+        "{speed}"
+    );
+    assert!(walk(
+        &WalkConfig {
+            step_length: -1.0,
+            ..config
+        },
+        0
+    )
+    .is_err());
+}
+
+#[test]
+fn alignment_turns_the_walk_onto_the_path() {
+    let w = walk(&WalkConfig::default(), 1).unwrap();
+    let step = w.step_length();
+    // A quarter circle of radius 2 m around (5, 2), walked at the gait's own step.
+    let n = (2.0 * FRAC_PI_2 / step) as usize;
+    let path: Vec<_> = (0..n)
+        .map(|i| {
+            let a = i as f32 * step / 2.0;
+            Point3::new(5.0 + 2.0 * a.cos(), 2.0 + 2.0 * a.sin(), 0.0)
+        })
+        .collect();
+    let aligned = align_to_trajectory(&w, &path, true).unwrap();
+    assert_eq!(aligned.frames.len(), n);
+    for (i, f) in aligned.frames.iter().enumerate() {
+        let t = f.torso();
+        assert_relative_eq!(t.x, path[i].x, epsilon = 1e-4);
+        assert_relative_eq!(t.y, path[i].y, epsilon = 1e-4);
+        assert!(t.z > 0.8, "keep_height keeps the torso up");
+        // The body faces along the tangent (walking straight ahead).
+        let a = i as f32 * step / 2.0;
+        let tangent = Vector3::new(-a.sin(), a.cos(), 0.0);
+        assert!(
+            f.facing().dot(&tangent) > 0.97,
+            "frame {i}: {:?}",
+            f.facing()
+        );
+    }
+    assert!(align_to_trajectory(&w, &[], false).is_err());
+    assert!(align_to_trajectory(&w, &[Point3::new(f32::NAN, 0.0, 0.0)], false).is_err());
+}
+
+#[test]
+fn the_getting_up_search_never_scores_worse() {
+    let scene = room();
+    let up = get_up(&SitConfig::default()).unwrap();
+    assert_eq!(up.supports[0], Support::Sitting);
+    // Rotate the chair's occupant 10 degrees off; the search may win some of it back.
+    let pivot = Point3::origin();
+    let turned = PoseSequence::new(
+        up.fps,
+        up.activity,
+        up.frames
+            .iter()
+            .map(|f| f.rotated_about_z(0.17, &pivot))
+            .collect(),
+        up.supports.clone(),
+    )
+    .unwrap();
+    let path: Vec<_> = turned
+        .frames
+        .iter()
+        .map(|f| f.torso() + Vector3::new(2.0, 2.0, 0.0))
+        .collect();
+    let plain = AlignConfig::default();
+    let search = AlignConfig {
+        search_degrees: 6.0,
+        ..AlignConfig::default()
+    };
+    let (_, before) = align_in_scene(&scene, &turned, &path, &plain).unwrap();
+    let (_, after) = align_in_scene(&scene, &turned, &path, &search).unwrap();
+    for (b, a) in before.iter().zip(&after) {
+        assert!(a.good_joints() >= b.good_joints());
+    }
+    assert!(align_in_scene(
+        &scene,
+        &turned,
+        &path,
+        &AlignConfig {
+            search_step_degrees: 0.0,
+            ..search
+        }
+    )
+    .is_err());
+}
+
+#[test]
+fn sequences_round_trip_through_json_and_reject_bad_files() {
+    let s = sit_down(&SitConfig::default()).unwrap();
+    let back = PoseSequence::from_json(&s.to_json()).unwrap();
+    assert_eq!(back, s);
+    let dir = std::env::temp_dir().join(format!("envfield-aff-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("sit.json");
+    s.write(&path).unwrap();
+    assert_eq!(PoseSequence::read(&path).unwrap(), s);
+    std::fs::write(&path, "{").unwrap();
+    assert!(PoseSequence::read(&path)
+        .unwrap_err()
+        .to_string()
+        .contains("sit.json"));
+    std::fs::remove_dir_all(&dir).unwrap();
+
+    let mut v: serde_json::Value = serde_json::from_str(&s.to_json()).unwrap();
+    v["joints"][3] = "tail".into();
+    let e = PoseSequence::from_json(&v.to_string())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("unknown joint `tail`"), "{e}");
+    let mut v: serde_json::Value = serde_json::from_str(&s.to_json()).unwrap();
+    v["frames"][5].as_array_mut().unwrap().pop();
+    let e = PoseSequence::from_json(&v.to_string())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("frame 5 has 21 joints"), "{e}");
+    let mut v: serde_json::Value = serde_json::from_str(&s.to_json()).unwrap();
+    v["fps"] = 0.0.into();
+    assert!(PoseSequence::from_json(&v.to_string()).is_err());
+    let mut v: serde_json::Value = serde_json::from_str(&s.to_json()).unwrap();
+    v["frames"] = serde_json::json!([]);
+    assert!(PoseSequence::from_json(&v.to_string()).is_err());
+    // Joints given in another order are mapped by name; supports default to standing.
+    let mut v: serde_json::Value = serde_json::from_str(&s.to_json()).unwrap();
+    v["joints"].as_array_mut().unwrap().swap(0, 1);
+    for f in v["frames"].as_array_mut().unwrap() {
+        f.as_array_mut().unwrap().swap(0, 1);
+    }
+    v.as_object_mut().unwrap().remove("supports");
+    let reordered = PoseSequence::from_json(&v.to_string()).unwrap();
+    assert_eq!(reordered.frames, s.frames);
+    assert!(reordered.supports.iter().all(|&x| x == Support::Standing));
+}
