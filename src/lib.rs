@@ -7,6 +7,9 @@
 //! - [`mazes`]: maze generators, datasets of target fields, evaluation pairs.
 //! - [`nets`]: implicit field networks (plain, goal, context-aligned, hypernetwork) and training.
 //! - [`plan`]: planners (field descent, gradient descent, A*) and the evaluation harness.
+//! - [`scene`]: signed-distance 3D scenes, OBJ/PLY, synthetic rooms, the bird's-eye floor map.
+//! - [`affordance`]: SMPL-layout poses and sequences, procedural motions, support and
+//!   collision checks, alignment to trajectories.
 //!
 //! ```
 //! use envfield::eikonal::FastMarching;
@@ -18,8 +21,10 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+pub use envfield_affordance as affordance;
 pub use envfield_eikonal as eikonal;
 pub use envfield_grid as grid;
 pub use envfield_mazes as mazes;
 pub use envfield_nets as nets;
 pub use envfield_plan as plan;
+pub use envfield_scene as scene;

@@ -73,6 +73,39 @@ pub struct FloorMap {
     pub floor_height: f32,
 }
 
+impl FloorMap {
+    /// The map with obstacles grown by a disc of `radius` metres: the cells where the centre
+    /// of a body of that radius can stand. O(obstacle cells x disc cells).
+    ///
+    /// # Errors
+    /// [`SceneError::InvalidInput`] for a negative or non-finite radius.
+    pub fn inflated(&self, radius: f32) -> Result<Grid2> {
+        if !(radius.is_finite() && radius >= 0.0) {
+            return Err(SceneError::InvalidInput(format!(
+                "inflation radius must be >= 0, got {radius}"
+            )));
+        }
+        let (rows, cols) = (self.grid.rows(), self.grid.cols());
+        let r = (radius / self.frame.resolution).round() as i64;
+        let disc: Vec<(i64, i64)> = (-r..=r)
+            .flat_map(|dr| (-r..=r).map(move |dc| (dr, dc)))
+            .filter(|(dr, dc)| dr * dr + dc * dc <= r * r)
+            .collect();
+        let source = self.grid.obstacles();
+        let mut out = source.to_vec();
+        for (i, _) in source.iter().enumerate().filter(|(_, &o)| o) {
+            let (row, col) = ((i / cols) as i64, (i % cols) as i64);
+            for (dr, dc) in &disc {
+                let (y, x) = (row + dr, col + dc);
+                if y >= 0 && x >= 0 && (y as usize) < rows && (x as usize) < cols {
+                    out[y as usize * cols + x as usize] = true;
+                }
+            }
+        }
+        Ok(Grid2::from_obstacles(rows, cols, out)?)
+    }
+}
+
 /// Renders the top-down depth image of `scene` over its bounding box and marks the deepest
 /// pixels free. Cost: one ray cast per pixel, in parallel.
 ///

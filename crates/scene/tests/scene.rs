@@ -340,6 +340,12 @@ fn rooms_keep_one_connected_floor_and_mark_furniture() {
                 );
             }
         }
+        // Growing obstacles by a body radius only removes free cells.
+        let grown = map.inflated(0.25).unwrap();
+        assert!(grown.free_count() < map.grid.free_count());
+        assert!(grown.free_cells().all(|c| map.grid.is_free(c)));
+        assert_eq!(map.inflated(0.0).unwrap(), map.grid);
+        assert!(map.inflated(-1.0).is_err());
         // The middle of the free floor is free space just above the floor.
         let i = labels.iter().position(|&l| l == 0).unwrap();
         let [x, y] = map.frame.center(map.grid.cell(i));
