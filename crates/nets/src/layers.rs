@@ -251,7 +251,7 @@ impl IndexCache {
 /// multiply; its backward is an index-add and a matrix multiply.
 #[derive(Clone, Debug)]
 pub(crate) struct Conv {
-    linear: Linear,
+    pub(crate) linear: Linear,
     spec: ConvSpec,
 }
 

@@ -411,3 +411,30 @@ fn voxels_cover_a_box_by_its_volume() {
     );
     assert!(VoxelFrame::covering(scene.aabb().unwrap(), 0.0).is_err());
 }
+
+#[test]
+fn an_open_scan_reads_negative_behind_its_oriented_surface() {
+    // A floor quad (normal up) and a wall quad at x = 2 facing -x: an open "scan".
+    let mesh = TriangleMesh {
+        vertices: vec![
+            Point3::new(0.0, 0.0, 0.0),
+            Point3::new(2.0, 0.0, 0.0),
+            Point3::new(2.0, 2.0, 0.0),
+            Point3::new(0.0, 2.0, 0.0),
+            Point3::new(2.0, 0.0, 2.0),
+            Point3::new(2.0, 2.0, 2.0),
+        ],
+        triangles: vec![[0, 1, 2], [0, 2, 3], [1, 5, 2], [1, 4, 5]],
+    };
+    let scene = Scene::from_mesh("scan", &mesh).unwrap();
+    let d = |x, y, z| scene.signed_distance(&Point3::new(x, y, z)).unwrap();
+    assert_relative_eq!(d(1.0, 1.0, 0.3), 0.3, epsilon = 1e-6);
+    assert_relative_eq!(d(1.0, 1.0, -0.2), -0.2, epsilon = 1e-6);
+    assert_relative_eq!(d(1.5, 1.0, 1.0), 0.5, epsilon = 1e-6);
+    assert_relative_eq!(d(2.25, 1.0, 1.0), -0.25, epsilon = 1e-6);
+    let s = scene.closest(&Point3::new(1.0, 1.0, 0.3)).unwrap().unwrap();
+    assert_relative_eq!(s.normal, Vector3::z(), epsilon = 1e-5);
+    // The floor map of the scan: the floor is free, the wall's top edge is not seen as floor.
+    let map = floor_map(&scene, &FloorMapConfig { resolution: 0.1, ..FloorMapConfig::default() }).unwrap();
+    assert!(map.grid.free_count() > 300);
+}
