@@ -13,7 +13,7 @@ use std::time::Instant;
 
 use anyhow::{Context, Result};
 use clap::Parser;
-use envfield::affordance::{align_in_scene, walk, AlignConfig, WalkConfig};
+use envfield::affordance::{align_in_scene, walk, AlignConfig, Joint, WalkConfig};
 use envfield::eikonal::FastMarching;
 use envfield::grid::{Cell2, HeatMapStyle, MoveRule};
 use envfield::plan::descend;
@@ -159,6 +159,18 @@ fn main() -> Result<()> {
     )?;
     let check_ms = t.elapsed().as_secs_f64() * 1e3;
     let valid = reports.iter().filter(|r| r.valid()).count();
+    // Which joints broke the invalid frames.
+    let mut culprits = std::collections::BTreeMap::<&str, usize>::new();
+    for r in reports.iter().filter(|r| !r.valid()) {
+        if !r.supported {
+            *culprits.entry("unsupported").or_default() += 1;
+        }
+        for joint in Joint::ALL {
+            if !r.support.joints().contains(&joint) && r.distances[joint.index()] < 0.0 {
+                *culprits.entry(joint.name()).or_default() += 1;
+            }
+        }
+    }
     let lifted: Vec<Point3<f32>> = trajectory
         .iter()
         .map(|p| p + envfield::scene::nalgebra::Vector3::new(0.0, 0.0, 0.05))
@@ -185,6 +197,7 @@ fn main() -> Result<()> {
             "frames": aligned.frames.len(),
             "valid_frames": valid,
             "valid_percent": 100.0 * valid as f32 / reports.len().max(1) as f32,
+            "invalid_because": culprits,
             "generate_ms": generate_ms,
             "floor_map_ms": map_ms,
             "plan_ms": plan_ms,

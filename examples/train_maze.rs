@@ -84,6 +84,10 @@ struct Args {
     /// Add value-iteration layers with this many Q channels to the context encoder (0: none).
     #[arg(long, default_value_t = 0)]
     propagation: usize,
+    /// Value iterations per cell of the maze's longer side (with --propagation); paths longer
+    /// than the iterations reach get no value from the goal.
+    #[arg(long, default_value_t = 1.3)]
+    propagation_iterations: f32,
     /// MLP hidden width and layers of the context network, as WIDTH:LAYERS.
     #[arg(long, default_value = "64:3")]
     mlp: String,
@@ -228,7 +232,7 @@ fn main() -> Result<()> {
                     if args.propagation > 0 {
                         c.propagation = Some(PropagationConfig {
                             q_channels: args.propagation,
-                            ..PropagationConfig::default()
+                            iterations_per_cell: args.propagation_iterations,
                         });
                     }
                     let (w, l) = args.mlp.split_once(':').context("--mlp WIDTH:LAYERS")?;

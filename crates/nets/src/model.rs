@@ -561,10 +561,12 @@ impl Propagation {
                         if sy < 0 || sy >= h as isize {
                             continue;
                         }
-                        let row = &mut dst[o * hw + y * w..o * hw + (y + 1) * w];
-                        let srow = &src[sy as usize * w..(sy as usize + 1) * w];
-                        for x in x0..x1 {
-                            row[x] += k * srow[(x as isize + dx) as usize];
+                        let row = &mut dst[o * hw + y * w + x0..o * hw + y * w + x1];
+                        let from = (sy * w as isize + x0 as isize + dx) as usize;
+                        let srow = &src[from..from + (x1 - x0)];
+                        // Slices of equal length: the compiler vectorises this.
+                        for (a, b) in row.iter_mut().zip(srow) {
+                            *a += k * b;
                         }
                     }
                 }
@@ -579,8 +581,11 @@ impl Propagation {
             // v starts at 0, so the first Q maps are the reward's share alone.
             q.copy_from_slice(&base);
             for _ in 0..iterations {
-                for (i, vi) in v.iter_mut().enumerate() {
-                    *vi = (0..nq).map(|o| q[o * hw + i]).fold(f32::NEG_INFINITY, f32::max);
+                v.copy_from_slice(&q[..hw]);
+                for o in 1..nq {
+                    for (vi, qi) in v.iter_mut().zip(&q[o * hw..(o + 1) * hw]) {
+                        *vi = vi.max(*qi);
+                    }
                 }
                 q.copy_from_slice(&base);
                 accumulate(&mut q, &v, 1);

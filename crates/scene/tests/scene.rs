@@ -435,6 +435,13 @@ fn an_open_scan_reads_negative_behind_its_oriented_surface() {
     let s = scene.closest(&Point3::new(1.0, 1.0, 0.3)).unwrap().unwrap();
     assert_relative_eq!(s.normal, Vector3::z(), epsilon = 1e-5);
     // The floor map of the scan: the floor is free, the wall's top edge is not seen as floor.
-    let map = floor_map(&scene, &FloorMapConfig { resolution: 0.1, ..FloorMapConfig::default() }).unwrap();
+    let map = floor_map(
+        &scene,
+        &FloorMapConfig {
+            resolution: 0.1,
+            ..FloorMapConfig::default()
+        },
+    )
+    .unwrap();
     assert!(map.grid.free_count() > 300);
 }
