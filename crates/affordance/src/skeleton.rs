@@ -331,7 +331,13 @@ impl PoseSequence {
 
     /// The JSON text: `{"fps", "activity", "joints": [22 names], "frames": [[[x, y, z] x 22]
     /// ...], "supports": [...]}`.
-    pub fn to_json(&self) -> String {
+    ///
+    /// # Errors
+    /// [`AffordanceError::InvalidInput`] when the sequence was edited into an invalid one
+    /// (its fields are public): no frames, a support list of another length, a non-finite
+    /// joint or frame rate.
+    pub fn to_json(&self) -> Result<String> {
+        self.validate()?;
         let file = SequenceFile {
             fps: self.fps,
             activity: self.activity,
@@ -343,7 +349,8 @@ impl PoseSequence {
                 .collect(),
             supports: Some(self.supports.clone()),
         };
-        serde_json::to_string(&file).unwrap_or_default()
+        serde_json::to_string(&file)
+            .map_err(|e| AffordanceError::InvalidInput(format!("pose sequence JSON: {e}")))
     }
 
     /// Parses the JSON form. Joints may come in any order (by name); `supports` may be left
@@ -411,9 +418,9 @@ impl PoseSequence {
     /// Writes the JSON file atomically.
     ///
     /// # Errors
-    /// I/O errors.
+    /// As [`PoseSequence::to_json`]; I/O errors.
     pub fn write(&self, path: impl AsRef<Path>) -> Result<()> {
-        envfield_grid::write_atomic(path, self.to_json().as_bytes())
+        envfield_grid::write_atomic(path, self.to_json()?.as_bytes())
             .map_err(|e| AffordanceError::Scene(e.into()))
     }
 }

@@ -287,8 +287,12 @@ fn the_getting_up_search_never_scores_worse() {
 #[test]
 fn sequences_round_trip_through_json_and_reject_bad_files() {
     let s = sit_down(&SitConfig::default()).unwrap();
-    let back = PoseSequence::from_json(&s.to_json()).unwrap();
+    let back = PoseSequence::from_json(&s.to_json().unwrap()).unwrap();
     assert_eq!(back, s);
+    let mut broken = s.clone();
+    broken.frames[2].joints[4].x = f32::NAN;
+    let e = broken.to_json().unwrap_err().to_string();
+    assert!(e.contains("frame 2") && e.contains("left_knee"), "{e}");
     let dir = std::env::temp_dir().join(format!("envfield-aff-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("sit.json");
@@ -301,26 +305,26 @@ fn sequences_round_trip_through_json_and_reject_bad_files() {
         .contains("sit.json"));
     std::fs::remove_dir_all(&dir).unwrap();
 
-    let mut v: serde_json::Value = serde_json::from_str(&s.to_json()).unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(&s.to_json().unwrap()).unwrap();
     v["joints"][3] = "tail".into();
     let e = PoseSequence::from_json(&v.to_string())
         .unwrap_err()
         .to_string();
     assert!(e.contains("unknown joint `tail`"), "{e}");
-    let mut v: serde_json::Value = serde_json::from_str(&s.to_json()).unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(&s.to_json().unwrap()).unwrap();
     v["frames"][5].as_array_mut().unwrap().pop();
     let e = PoseSequence::from_json(&v.to_string())
         .unwrap_err()
         .to_string();
     assert!(e.contains("frame 5 has 21 joints"), "{e}");
-    let mut v: serde_json::Value = serde_json::from_str(&s.to_json()).unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(&s.to_json().unwrap()).unwrap();
     v["fps"] = 0.0.into();
     assert!(PoseSequence::from_json(&v.to_string()).is_err());
-    let mut v: serde_json::Value = serde_json::from_str(&s.to_json()).unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(&s.to_json().unwrap()).unwrap();
     v["frames"] = serde_json::json!([]);
     assert!(PoseSequence::from_json(&v.to_string()).is_err());
     // Joints given in another order are mapped by name; supports default to standing.
-    let mut v: serde_json::Value = serde_json::from_str(&s.to_json()).unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(&s.to_json().unwrap()).unwrap();
     v["joints"].as_array_mut().unwrap().swap(0, 1);
     for f in v["frames"].as_array_mut().unwrap() {
         f.as_array_mut().unwrap().swap(0, 1);
