@@ -94,6 +94,10 @@ struct Args {
     /// Weight of the neighbour-difference loss (0: plain L1). Also applies to a resumed run.
     #[arg(long)]
     neighbour_weight: Option<f64>,
+    /// Fraction of queries drawn from detour cells (distance above the octile distance to the
+    /// goal: the path bends around obstacles). Also applies to a resumed run.
+    #[arg(long)]
+    detour_fraction: Option<f64>,
     /// Stop (with a checkpoint) at this step, before --steps; the learning-rate schedule still
     /// follows --steps, so a later --resume continues the same run.
     #[arg(long)]
@@ -188,6 +192,9 @@ fn main() -> Result<()> {
             if let Some(w) = args.neighbour_weight {
                 t.set_neighbour_weight(w)?;
             }
+            if let Some(f) = args.detour_fraction {
+                t.set_detour_fraction(f)?;
+            }
             eprintln!("resumed {} at step {}", path.display(), t.step());
             t
         }
@@ -261,6 +268,7 @@ fn main() -> Result<()> {
                 validate_every: args.every,
                 validation_samples: 64,
                 neighbour_weight: args.neighbour_weight.unwrap_or(0.0),
+                detour_fraction: args.detour_fraction.unwrap_or(0.0),
                 ..TrainConfig::default()
             };
             Trainer::new(FieldNet::new(model, args.seed)?, train)?

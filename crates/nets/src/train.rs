@@ -50,6 +50,12 @@ pub struct TrainConfig {
     /// field's local slope directly. 0 disables it (plain L1).
     #[serde(default)]
     pub neighbour_weight: f64,
+    /// Fraction of the (anchor) queries drawn from *detour cells*: reachable cells whose
+    /// distance exceeds the octile distance to the goal by more than half a cell, where the
+    /// path must bend around obstacles and descent is most often misled. The rest are uniform
+    /// over the grid. 0 (the default) samples uniformly.
+    #[serde(default)]
+    pub detour_fraction: f64,
 }
 
 impl Default for TrainConfig {
@@ -68,6 +74,7 @@ impl Default for TrainConfig {
             validate_every: 500,
             validation_samples: 256,
             neighbour_weight: 0.0,
+            detour_fraction: 0.0,
         }
     }
 }
@@ -89,14 +96,16 @@ impl TrainConfig {
             && self.queries_per_item > 0
             && self.validation_samples > 0
             && self.neighbour_weight >= 0.0
-            && (self.neighbour_weight == 0.0 || self.queries_per_item % 2 == 0);
+            && (self.neighbour_weight == 0.0 || self.queries_per_item % 2 == 0)
+            && (0.0..=1.0).contains(&self.detour_fraction);
         if ok {
             Ok(())
         } else {
             Err(NetsError::InvalidConfig(format!(
                 "training: need lr > 0, final_lr_fraction in [0, 1], betas in [0, 1), eps > 0, \
                  weight_decay >= 0, batch_items, queries_per_item and validation_samples >= 1, \
-                 neighbour_weight >= 0 with an even queries_per_item (got {self:?})"
+                 neighbour_weight >= 0 with an even queries_per_item, detour_fraction in [0, 1] \
+                 (got {self:?})"
             )))
         }
     }
@@ -256,6 +265,21 @@ impl Trainer {
         Ok(())
     }
 
+    /// Sets the fraction of queries drawn from detour cells (see
+    /// [`TrainConfig::detour_fraction`]), for example to fine-tune a resumed run.
+    ///
+    /// # Errors
+    /// [`NetsError::InvalidConfig`] for a fraction outside `[0, 1]`.
+    pub fn set_detour_fraction(&mut self, fraction: f64) -> Result<()> {
+        let config = TrainConfig {
+            detour_fraction: fraction,
+            ..self.config.clone()
+        };
+        config.validate()?;
+        self.config = config;
+        Ok(())
+    }
+
     /// Sets the total number of steps (to train a resumed run further).
     pub fn set_steps(&mut self, steps: u64) {
         self.config.steps = steps;
@@ -363,6 +387,11 @@ impl Trainer {
             }
             batch.goals.extend([s.goal.row as f32, s.goal.col as f32]);
             let pairs = self.config.neighbour_weight > 0.0;
+            let detours = if self.config.detour_fraction > 0.0 {
+                detour_cells(s)
+            } else {
+                Vec::new()
+            };
             for k in 0..q {
                 let i = if pairs && k % 2 == 1 {
                     // A random in-bounds neighbour of the previous query.
@@ -376,6 +405,8 @@ impl Trainer {
                             break nr as usize * cols + nc as usize;
                         }
                     }
+                } else if !detours.is_empty() && unit_f64(&mut rng) < self.config.detour_fraction {
+                    detours[rng.below(detours.len())]
                 } else {
                     rng.below(rows * cols)
                 };
@@ -480,6 +511,28 @@ impl Trainer {
 }
 
 /// Dataset targets are in the paper's encoding; the network may use another.
+/// A uniform float in `[0, 1)`.
+fn unit_f64(rng: &mut SplitMix64) -> f64 {
+    (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+}
+
+/// The reachable cells of `s` whose distance exceeds the octile distance to the goal by more
+/// than half a cell.
+fn detour_cells(s: &Sample) -> Vec<usize> {
+    let cols = s.grid.cols();
+    s.target
+        .iter()
+        .enumerate()
+        .filter_map(|(i, &t)| {
+            let d = envfield_mazes::decode_target(t);
+            let dr = (i / cols).abs_diff(s.goal.row) as f32;
+            let dc = (i % cols).abs_diff(s.goal.col) as f32;
+            let octile = dr.max(dc) + (std::f32::consts::SQRT_2 - 1.0) * dr.min(dc);
+            (d.is_finite() && d > octile + 0.5).then_some(i)
+        })
+        .collect()
+}
+
 fn reencode(encoding: TargetEncoding, paper: f32) -> f32 {
     match encoding {
         TargetEncoding::Reciprocal => paper,

@@ -403,3 +403,64 @@ fn neighbour_loss_pairs_adjacent_cells() {
         .unwrap();
     assert!(summary.loss.is_finite());
 }
+
+/// With `detour_fraction` 1, every query is a cell whose distance exceeds its octile distance
+/// to the goal; out of range it is a config error.
+#[test]
+fn detour_sampling_draws_cells_behind_obstacles() {
+    let data = dataset(16, 6, 2, 8);
+    let cfg = TrainConfig {
+        batch_items: 6,
+        queries_per_item: 40,
+        detour_fraction: 1.0,
+        ..TrainConfig::default()
+    };
+    let net = || FieldNet::new(ModelConfig::Context(small_context()), 3).unwrap();
+    assert!(matches!(
+        Trainer::new(
+            net(),
+            TrainConfig {
+                detour_fraction: 1.5,
+                ..cfg.clone()
+            }
+        ),
+        Err(NetsError::InvalidConfig(_))
+    ));
+    let trainer = Trainer::new(net(), cfg).unwrap();
+    let mut drawn = 0;
+    for step in 0..5 {
+        let (batch, _) = trainer.sample_batch(&data, step).unwrap();
+        for (item, queries) in batch.queries.chunks_exact(80).enumerate() {
+            let goal = (batch.goals[2 * item], batch.goals[2 * item + 1]);
+            let sample = data
+                .samples
+                .iter()
+                .find(|s| {
+                    (s.goal.row as f32, s.goal.col as f32) == goal
+                        && s.grid
+                            .obstacles()
+                            .iter()
+                            .map(|&o| o as u8 as f32)
+                            .eq(batch.obstacles[item * 256..(item + 1) * 256]
+                                .iter()
+                                .copied())
+                })
+                .expect("the item's sample");
+            for q in queries.chunks_exact(2) {
+                let (r, c) = (q[0] as usize, q[1] as usize);
+                let d = envfield_mazes::decode_target(sample.target[r * 16 + c]);
+                let (dr, dc) = (
+                    r.abs_diff(sample.goal.row) as f32,
+                    c.abs_diff(sample.goal.col) as f32,
+                );
+                let octile = dr.max(dc) + (2f32.sqrt() - 1.0) * dr.min(dc);
+                assert!(
+                    d.is_finite() && d > octile + 0.5,
+                    "({r}, {c}): {d} vs {octile}"
+                );
+                drawn += 1;
+            }
+        }
+    }
+    assert_eq!(drawn, 5 * 6 * 40);
+}
