@@ -19,10 +19,6 @@ use std::hint::black_box;
 #[global_allocator]
 static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
-fn uniform(rng: &mut SplitMix64) -> f32 {
-    (rng.next_u64() >> 40) as f32 / (1u64 << 24) as f32
-}
-
 fn bench_sdf(c: &mut Criterion) {
     let room = generate_room(&RoomConfig::default(), 0).expect("room");
     let aabb = *room.scene.aabb().expect("non-empty");
@@ -32,9 +28,9 @@ fn bench_sdf(c: &mut Criterion) {
             Point3::from(
                 aabb.mins.coords
                     + (aabb.maxs - aabb.mins).component_mul(&Vector3::new(
-                        uniform(&mut rng),
-                        uniform(&mut rng),
-                        uniform(&mut rng),
+                        rng.next_f32(),
+                        rng.next_f32(),
+                        rng.next_f32(),
                     )),
             )
         })

@@ -17,7 +17,7 @@ use envfield::affordance::{align_in_scene, walk, AlignConfig, Joint, WalkConfig}
 use envfield::eikonal::FastMarching;
 use envfield::grid::{Cell2, HeatMapStyle, MoveRule};
 use envfield::plan::descend;
-use envfield::scene::nalgebra::Point3;
+use envfield::scene::nalgebra::{distance, Point3};
 use envfield::scene::{
     floor_map, free_components, generate_room, sample_surface, write_point_cloud,
     write_polyline_obj, FloorMapConfig, RoomConfig,
@@ -135,7 +135,7 @@ fn main() -> Result<()> {
     let mut trajectory = vec![cells[0]];
     let mut carried = 0.0;
     for w in cells.windows(2) {
-        let d = nalgebra_distance(&w[0], &w[1]);
+        let d = distance(&w[0], &w[1]);
         let mut s = step - carried;
         while s <= d {
             trajectory.push(w[0] + (w[1] - w[0]) * (s / d));
@@ -143,10 +143,7 @@ fn main() -> Result<()> {
         }
         carried = d - (s - step);
     }
-    let length: f32 = cells
-        .windows(2)
-        .map(|w| nalgebra_distance(&w[0], &w[1]))
-        .sum();
+    let length: f32 = cells.windows(2).map(|w| distance(&w[0], &w[1])).sum();
     let t = Instant::now();
     let (aligned, reports) = align_in_scene(
         &room.scene,
@@ -206,8 +203,4 @@ fn main() -> Result<()> {
         })
     );
     Ok(())
-}
-
-fn nalgebra_distance(a: &Point3<f32>, b: &Point3<f32>) -> f32 {
-    (b - a).norm()
 }

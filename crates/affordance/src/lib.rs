@@ -39,8 +39,3 @@ pub use motion::{
     get_up, lie_down, sit_down, standing_pose, walk, LieConfig, SitConfig, WalkConfig,
 };
 pub use skeleton::{Activity, Joint, Pose, PoseSequence, Support, JOINT_COUNT};
-
-/// A uniform float in `[0, 1)`.
-pub(crate) fn unit(rng: &mut envfield_grid::synth::SplitMix64) -> f32 {
-    (rng.next_u64() >> 40) as f32 / (1u64 << 24) as f32
-}

@@ -49,6 +49,13 @@ impl Gait {
         sagittal(self.hip[side]) * THIGH + sagittal(self.hip[side] - self.knee[side]) * SHANK
     }
 
+    /// Places the pelvis so that the midpoint of the hips is at `hips`.
+    fn set_hip_centre(&mut self, hips: Vector3<f32>) {
+        let pelvis_to_hips = Rotation3::from_axis_angle(&Vector3::y_axis(), self.pitch)
+            * Vector3::new(0.0, 0.0, -PELVIS_TO_HIP);
+        self.pelvis = hips - pelvis_to_hips;
+    }
+
     fn pose(&self) -> Pose {
         let torso = Rotation3::from_axis_angle(&Vector3::y_axis(), self.pitch);
         let pelvis = Point3::from(self.pelvis);
@@ -159,7 +166,7 @@ pub fn walk(config: &WalkConfig, seed: u64) -> Result<PoseSequence> {
         )));
     }
     let mut rng = SplitMix64::new(seed);
-    let mut jitter = || 1.0 + config.variation * (2.0 * crate::unit(&mut rng) - 1.0);
+    let mut jitter = || 1.0 + config.variation * (2.0 * rng.next_f32() - 1.0);
     let step = config.step_length * jitter();
     let cadence = config.cadence * jitter();
     let period = 2.0 / cadence;
@@ -266,9 +273,7 @@ pub fn sit_down(config: &SitConfig) -> Result<PoseSequence> {
         }
         // Keep the ankles where they are: the pelvis follows from the leg.
         let leg = g.leg(0);
-        let hip_offset = Rotation3::from_axis_angle(&Vector3::y_axis(), g.pitch)
-            * Vector3::new(0.0, 0.0, -PELVIS_TO_HIP);
-        g.pelvis = Vector3::new(ankle_x - leg.x, 0.0, ANKLE_HEIGHT - leg.z) - hip_offset;
+        g.set_hip_centre(Vector3::new(ankle_x - leg.x, 0.0, ANKLE_HEIGHT - leg.z));
         supports.push(if s > 0.999 {
             Support::Sitting
         } else {
@@ -350,10 +355,11 @@ pub fn lie_down(config: &LieConfig) -> Result<PoseSequence> {
         }
         // The hips stay on the surface while the pelvis rolls back onto it; lying, the joints
         // sit 8 cm above the surface, inside the body as SMPL's do.
-        let hip_height = config.seat_height + 0.08 * s;
-        let hip_offset = Rotation3::from_axis_angle(&Vector3::y_axis(), g.pitch)
-            * Vector3::new(0.0, 0.0, -PELVIS_TO_HIP);
-        g.pelvis = Vector3::new(-config.slide * s, 0.0, hip_height) - hip_offset;
+        g.set_hip_centre(Vector3::new(
+            -config.slide * s,
+            0.0,
+            config.seat_height + 0.08 * s,
+        ));
         supports.push(if s > 0.999 {
             Support::Lying
         } else {

@@ -806,9 +806,10 @@ impl FieldNet {
         )?)
     }
 
-    /// The raw outputs (N,) for `batch`, tracked for gradients. `queries` must be the
-    /// batch's query coordinates as an (N, d) tensor (a [`Var`] when input gradients are
-    /// wanted).
+    /// The raw outputs (N,) for `batch`. `queries` must be the batch's query coordinates as
+    /// an (N, d) tensor (a [`Var`] when input gradients are wanted). With `track` false, the
+    /// parts that do not depend on the queries (value iteration) skip the autograd graph:
+    /// right for inference and query gradients, not for training the weights.
     fn forward_with(&self, batch: &Batch, queries: &Tensor, track: bool) -> Result<Tensor> {
         let d = batch.extent.len();
         let n = batch.len();
@@ -913,10 +914,16 @@ impl FieldNet {
     /// # Errors
     /// [`NetsError::InvalidInput`] for a batch that does not fit the network.
     pub fn forward(&self, batch: &Batch) -> Result<Tensor> {
+        self.forward_batch(batch, true)
+    }
+
+    /// Checks `batch` and runs the network on its queries; `track` as in
+    /// [`FieldNet::forward_with`].
+    fn forward_batch(&self, batch: &Batch, track: bool) -> Result<Tensor> {
         batch.check(&self.config)?;
         let d = batch.extent.len();
         let queries = Tensor::from_vec(batch.queries.clone(), (batch.len(), d), &self.device)?;
-        self.forward_with(batch, &queries, true)
+        self.forward_with(batch, &queries, track)
     }
 
     /// The raw outputs for `batch`, one per query.
@@ -924,11 +931,8 @@ impl FieldNet {
     /// # Errors
     /// As [`FieldNet::forward`].
     pub fn predict_encoded(&self, batch: &Batch) -> Result<Vec<f32>> {
-        batch.check(&self.config)?;
-        let d = batch.extent.len();
-        let queries = Tensor::from_vec(batch.queries.clone(), (batch.len(), d), &self.device)?;
         Ok(self
-            .forward_with(batch, &queries, false)?
+            .forward_batch(batch, false)?
             .detach()
             .to_vec1::<f32>()?)
     }

@@ -256,10 +256,13 @@ impl Trainer {
     /// # Errors
     /// [`NetsError::InvalidConfig`] for a negative weight or an odd `queries_per_item`.
     pub fn set_neighbour_weight(&mut self, weight: f64) -> Result<()> {
-        let config = TrainConfig {
-            neighbour_weight: weight,
-            ..self.config.clone()
-        };
+        self.update_config(|c| c.neighbour_weight = weight)
+    }
+
+    /// Applies `change` to a copy of the config and keeps it if it validates.
+    fn update_config(&mut self, change: impl FnOnce(&mut TrainConfig)) -> Result<()> {
+        let mut config = self.config.clone();
+        change(&mut config);
         config.validate()?;
         self.config = config;
         Ok(())
@@ -271,13 +274,7 @@ impl Trainer {
     /// # Errors
     /// [`NetsError::InvalidConfig`] for a fraction outside `[0, 1]`.
     pub fn set_detour_fraction(&mut self, fraction: f64) -> Result<()> {
-        let config = TrainConfig {
-            detour_fraction: fraction,
-            ..self.config.clone()
-        };
-        config.validate()?;
-        self.config = config;
-        Ok(())
+        self.update_config(|c| c.detour_fraction = fraction)
     }
 
     /// Sets the total number of steps (to train a resumed run further).
@@ -405,7 +402,7 @@ impl Trainer {
                             break nr as usize * cols + nc as usize;
                         }
                     }
-                } else if !detours.is_empty() && unit_f64(&mut rng) < self.config.detour_fraction {
+                } else if !detours.is_empty() && rng.next_f64() < self.config.detour_fraction {
                     detours[rng.below(detours.len())]
                 } else {
                     rng.below(rows * cols)
@@ -510,12 +507,6 @@ impl Trainer {
     }
 }
 
-/// Dataset targets are in the paper's encoding; the network may use another.
-/// A uniform float in `[0, 1)`.
-fn unit_f64(rng: &mut SplitMix64) -> f64 {
-    (rng.next_u64() >> 11) as f64 / (1u64 << 53) as f64
-}
-
 /// The reachable cells of `s` whose distance exceeds the octile distance to the goal by more
 /// than half a cell.
 fn detour_cells(s: &Sample) -> Vec<usize> {
@@ -533,6 +524,7 @@ fn detour_cells(s: &Sample) -> Vec<usize> {
         .collect()
 }
 
+/// Dataset targets are in the paper's encoding; the network may use another.
 fn reencode(encoding: TargetEncoding, paper: f32) -> f32 {
     match encoding {
         TargetEncoding::Reciprocal => paper,

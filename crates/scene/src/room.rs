@@ -9,7 +9,6 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Result, SceneError};
 use crate::floor::{floor_map, free_components, FloorMapConfig};
-use crate::sample::unit;
 use crate::scene::{ObjectKind, Primitive, Scene, SceneObject};
 
 /// What [`generate_room`] builds. Sizes are in metres; ranges are `[min, max]`.
@@ -153,7 +152,7 @@ pub struct Room {
 pub fn generate_room(config: &RoomConfig, seed: u64) -> Result<Room> {
     config.validate()?;
     let mut rng = SplitMix64::new(seed);
-    let range = |rng: &mut SplitMix64, r: [f32; 2]| r[0] + (r[1] - r[0]) * unit(rng);
+    let range = |rng: &mut SplitMix64, r: [f32; 2]| r[0] + (r[1] - r[0]) * rng.next_f32();
     let w = range(&mut rng, config.width);
     let d = range(&mut rng, config.depth);
     let t = config.wall_thickness;
@@ -175,7 +174,7 @@ pub fn generate_room(config: &RoomConfig, seed: u64) -> Result<Room> {
         let mut segments = vec![(-t, length + t)];
         if door_walls.contains(&wall) {
             let half = config.door_width / 2.0;
-            let c = 0.2 + half + (length - 0.4 - 2.0 * half) * unit(&mut rng);
+            let c = 0.2 + half + (length - 0.4 - 2.0 * half) * rng.next_f32();
             doors.push((wall, c));
             segments = vec![(-t, c - half), (c + half, length + t)];
         }
@@ -238,7 +237,7 @@ pub fn generate_room(config: &RoomConfig, seed: u64) -> Result<Room> {
                 // The back touches the wall, the front faces the room.
                 let wall = rng.below(4);
                 let along = |rng: &mut SplitMix64, length: f32| {
-                    size[0] / 2.0 + (length - size[0]).max(0.0) * unit(rng)
+                    size[0] / 2.0 + (length - size[0]).max(0.0) * rng.next_f32()
                 };
                 let back = size[1] / 2.0 + 0.01;
                 match wall {
@@ -258,8 +257,8 @@ pub fn generate_room(config: &RoomConfig, seed: u64) -> Result<Room> {
                 }
                 (
                     [
-                        hx + gap + span_x * unit(&mut rng),
-                        hy + gap + span_y * unit(&mut rng),
+                        hx + gap + span_x * rng.next_f32(),
+                        hy + gap + span_y * rng.next_f32(),
                     ],
                     yaw,
                 )
@@ -321,7 +320,7 @@ fn at(x: f32, y: f32, z: f32, yaw: f32) -> Isometry3<f32> {
 
 /// Width (x), depth (y), height of each kind, drawn from plausible ranges.
 fn furniture_size(kind: ObjectKind, rng: &mut SplitMix64) -> [f32; 3] {
-    let mut r = |a: f32, b: f32| a + (b - a) * unit(rng);
+    let mut r = |a: f32, b: f32| a + (b - a) * rng.next_f32();
     match kind {
         ObjectKind::Bed => [r(1.4, 1.8), r(1.95, 2.1), 1.0],
         ObjectKind::Sofa => [r(1.8, 2.2), r(0.85, 0.95), 0.85],

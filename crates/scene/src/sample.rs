@@ -10,11 +10,6 @@ use serde::{Deserialize, Serialize};
 use crate::error::{Result, SceneError};
 use crate::scene::Scene;
 
-/// A uniform float in `[0, 1)` from 24 random bits.
-pub(crate) fn unit(rng: &mut SplitMix64) -> f32 {
-    (rng.next_u64() >> 40) as f32 / (1u64 << 24) as f32
-}
-
 /// `count` points spread uniformly (by area) over the scene's visible surfaces, seeded.
 ///
 /// Points of a part's surface that lie inside another part (a table leg's end in the floor)
@@ -45,12 +40,12 @@ pub fn sample_surface(scene: &Scene, count: usize, seed: u64) -> Result<Vec<Poin
     for _round in 0..32 {
         let candidates: Vec<Point3<f32>> = (0..count)
             .map(|_| {
-                let r = unit(&mut rng) as f64 * total;
+                let r = rng.next_f32() as f64 * total;
                 let i = cumulative
                     .partition_point(|&c| c <= r)
                     .min(cumulative.len() - 1);
                 let [a, b, c] = mesh.triangles[i].map(|v| mesh.vertices[v as usize]);
-                let (mut u, mut v) = (unit(&mut rng), unit(&mut rng));
+                let (mut u, mut v) = (rng.next_f32(), rng.next_f32());
                 if u + v > 1.0 {
                     (u, v) = (1.0 - u, 1.0 - v);
                 }

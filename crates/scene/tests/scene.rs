@@ -13,7 +13,7 @@ use envfield_scene::{
 use nalgebra::{Isometry3, Point3, Vector3};
 
 fn rand(rng: &mut SplitMix64, lo: f32, hi: f32) -> f32 {
-    lo + (hi - lo) * ((rng.next_u64() >> 40) as f32 / (1u64 << 24) as f32)
+    lo + (hi - lo) * rng.next_f32()
 }
 
 fn random_point(rng: &mut SplitMix64, r: f32) -> Point3<f32> {
