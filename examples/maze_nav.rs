@@ -15,7 +15,7 @@ use anyhow::{bail, Context, Result};
 use clap::Parser;
 use envfield::eikonal::{FastMarching, GraphDistance};
 use envfield::grid::{
-    write_atomic, Cell2, FieldModel, HeatMapStyle, Maze, MoveRule, Neighbourhood2,
+    write_atomic, Cell2, FieldModel, HeatMapStyle, Maze, MoveRule, Neighbourhood2, Symmetric,
 };
 use envfield::mazes::{GeneratorKind, MazeGenerator};
 use envfield::nets::{FieldNet, Vin};
@@ -69,6 +69,10 @@ struct Args {
     /// that size). VIN always loads models/vin_<size>.safetensors unless this names a VIN file.
     #[arg(long)]
     model: Option<PathBuf>,
+    /// Average the learned field (`field`, `hyper`) over this many symmetric views of each maze
+    /// (1 to 8: transposes and flips; test-time augmentation, one prediction per view).
+    #[arg(long, default_value_t = 1)]
+    views: usize,
     /// Move rule: strict or vin.
     #[arg(long, default_value = "vin")]
     rule: String,
@@ -116,7 +120,13 @@ fn model_file(arch: &str, size: usize, explicit: Option<&Path>) -> Result<PathBu
 }
 
 impl Choice {
-    fn parse(name: &str, rule: MoveRule, size: usize, model: Option<&Path>) -> Result<Self> {
+    fn parse(
+        name: &str,
+        rule: MoveRule,
+        size: usize,
+        model: Option<&Path>,
+        views: usize,
+    ) -> Result<Self> {
         let model: Box<dyn FieldModel + Send + Sync> = match name {
             "fmm" => Box::new(FastMarching::default()),
             "graph" => Box::new(GraphDistance::new(Neighbourhood2::Eight(rule))),
@@ -126,7 +136,11 @@ impl Choice {
                 let file = model_file(arch, size, model)?;
                 let net =
                     FieldNet::load(&file).with_context(|| format!("loading {}", file.display()))?;
-                Box::new(net)
+                if views == 1 {
+                    Box::new(net)
+                } else {
+                    Box::new(Symmetric::new(net, views)?)
+                }
             }
             "vin" => {
                 let file = match model.filter(|p| Vin::load(p).is_ok()) {
@@ -255,7 +269,7 @@ fn main() -> Result<()> {
             .map_or(0, |m| m.grid.rows().max(m.grid.cols()));
         let choices: Vec<Choice> = names
             .iter()
-            .map(|n| Choice::parse(n, rule, size, args.model.as_deref()))
+            .map(|n| Choice::parse(n, rule, size, args.model.as_deref(), args.views))
             .collect::<Result<_>>()?;
         for choice in &choices {
             let bar = indicatif::ProgressBar::new(0).with_message(format!(

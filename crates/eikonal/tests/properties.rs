@@ -1,8 +1,10 @@
 //! Property tests on random grids (proptest, seeded through its config and our generator).
 
-use envfield_eikonal::{bfs2, bfs3, dijkstra2, dijkstra3, FastMarching, Order};
+use envfield_eikonal::{bfs2, bfs3, dijkstra2, dijkstra3, FastMarching, GraphDistance, Order};
 use envfield_grid::synth::{scatter_cubes3, scatter_squares2, SplitMix64};
-use envfield_grid::{Cell2, Cell3, Grid2, MoveRule, Neighbourhood2, Neighbourhood3};
+use envfield_grid::{
+    Cell2, Cell3, FieldModel, Grid2, MoveRule, Neighbourhood2, Neighbourhood3, Symmetric,
+};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
 
@@ -166,4 +168,27 @@ fn three_d_graph_and_marching_agree_on_reachability() {
             },
         )
         .unwrap();
+}
+
+#[test]
+fn exact_fields_are_symmetric_so_averaging_views_changes_nothing() {
+    // Both move rules look the same under transposes and flips, so the oracle averaged over all
+    // eight views of a grid is the oracle itself: a known answer for `Symmetric`'s mapping.
+    for rule in [MoveRule::Strict, MoveRule::Vin] {
+        runner(24)
+            .run(&grid_and_source(), |(grid, goal)| {
+                let exact = GraphDistance::new(Neighbourhood2::Eight(rule));
+                let plain = exact.predict(&grid, goal).unwrap();
+                let views = Symmetric::new(GraphDistance::new(Neighbourhood2::Eight(rule)), 8)
+                    .unwrap()
+                    .predict(&grid, goal)
+                    .unwrap();
+                for (a, b) in plain.values().iter().zip(views.values()) {
+                    prop_assert!(a == b || (a - b).abs() <= 1e-4 * a.max(1.0), "{a} vs {b}");
+                }
+                Ok(())
+            })
+            .unwrap();
+    }
+    assert!(Symmetric::new(GraphDistance::new(Neighbourhood2::Four), 9).is_err());
 }

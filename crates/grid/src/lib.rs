@@ -41,6 +41,7 @@ mod model;
 mod moves;
 mod npy;
 mod png;
+mod symmetry;
 pub mod synth;
 
 pub use cell::{Cell2, Cell3, Point2, Point3};
@@ -53,3 +54,4 @@ pub use model::{ContinuousField2, FieldModel};
 pub use moves::{MoveRule, Neighbourhood2, Neighbourhood3, DIRECTIONS_8};
 pub use npy::{NpyArray, NpyData};
 pub use png::{HeatMapStyle, OBSTACLE_COLOR, UNREACHABLE_COLOR};
+pub use symmetry::{Symmetric, Symmetry};
