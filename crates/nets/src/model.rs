@@ -396,6 +396,23 @@ impl Batch {
         }
     }
 
+    /// Every free cell of `grid` as a query for `goal` (row-major order): what a field needs,
+    /// since obstacles are infinite whatever the network says.
+    pub fn free_cells(grid: &Grid2, goal: Cell2) -> Self {
+        let queries = grid
+            .free_cells()
+            .flat_map(|c| [c.row as f32, c.col as f32])
+            .collect::<Vec<_>>();
+        Self {
+            extent: vec![grid.rows(), grid.cols()],
+            items: 1,
+            obstacles: obstacle_map(grid),
+            goals: vec![goal.row as f32, goal.col as f32],
+            per_item: queries.len() / 2,
+            queries,
+        }
+    }
+
     /// Continuous points of one 2D grid and goal.
     pub fn points(grid: &Grid2, goal: Cell2, points: &[Point2]) -> Self {
         Self {
@@ -978,7 +995,7 @@ impl FieldNet {
     }
 
     /// The reaching-distance field of `grid` for `goal`: one batched forward pass (the encoder
-    /// once, every cell in one MLP batch), decoded with [`TargetEncoding::decode`]; obstacles
+    /// once, every free cell in one MLP batch), decoded with [`TargetEncoding::decode`]; obstacles
     /// are infinite.
     ///
     /// # Errors
@@ -986,12 +1003,16 @@ impl FieldNet {
     pub fn field(&self, grid: &Grid2, goal: Cell2) -> Result<Field2> {
         grid.check_free(goal, "goal")?;
         self.check_scene(grid, goal)?;
-        let raw = self.predict_encoded(&Batch::whole_grid(grid, goal))?;
+        let raw = self.predict_encoded(&Batch::free_cells(grid, goal))?;
         let encoding = self.config.encoding();
-        let values = raw
+        let mut free = raw.iter();
+        let values = grid
+            .obstacles()
             .iter()
-            .zip(grid.obstacles())
-            .map(|(&t, &o)| if o { f32::INFINITY } else { encoding.decode(t) })
+            .map(|&o| match o {
+                true => f32::INFINITY,
+                false => free.next().map_or(f32::INFINITY, |&t| encoding.decode(t)),
+            })
             .collect();
         Ok(Field2::new(grid.rows(), grid.cols(), values)?)
     }
