@@ -13,6 +13,8 @@
 //!   heat-map output ([`HeatMapStyle`]), `.npy` input/output ([`NpyArray`]).
 //! - [`FieldModel`]: "the reaching-distance field of this grid for this goal", implemented by
 //!   the exact solvers and by every learned model.
+//! - [`Symmetry`]: the eight transposes and flips of a grid, under which both move rules look
+//!   the same; [`Symmetric`] averages any [`FieldModel`] over several of them.
 //!
 //! ```
 //! use envfield_grid::{parse_mazes, Cell2, MoveRule, Neighbourhood2};
