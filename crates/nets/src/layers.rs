@@ -322,6 +322,54 @@ impl ConvStack {
         }
         Ok(h)
     }
+
+    /// [`ConvStack::forward`] without autograd, for prediction: the im2col gather, bias and
+    /// ReLU run as plain loops over one buffer per layer, and only the matrix multiply goes
+    /// through candle. Same result as `forward` up to the order of float additions.
+    pub(crate) fn forward_inference(&self, x: &Tensor) -> Result<Tensor> {
+        let (b, mut h, mut w, mut c) = x.dims4()?;
+        let mut act: Vec<f32> = x.flatten_all()?.to_vec1()?;
+        for conv in &self.convs {
+            let (d, s) = (conv.spec.dilation as isize, conv.spec.stride);
+            let (ho, wo) = ((h - 1) / s + 1, (w - 1) / s + 1);
+            let mut cols = vec![0.0f32; b * ho * wo * 9 * c];
+            let mut rows = cols.chunks_exact_mut(9 * c);
+            for image in act.chunks_exact(h * w * c) {
+                for oy in 0..ho {
+                    for ox in 0..wo {
+                        let row = rows.next().expect("one im2col row per output cell");
+                        for ky in 0..3 {
+                            let iy = (oy * s) as isize + (ky - 1) * d;
+                            if iy < 0 || iy as usize >= h {
+                                continue;
+                            }
+                            for kx in 0..3 {
+                                let ix = (ox * s) as isize + (kx - 1) * d;
+                                if ix >= 0 && (ix as usize) < w {
+                                    let at = (iy as usize * w + ix as usize) * c;
+                                    let tap = (ky * 3 + kx) as usize * c;
+                                    row[tap..tap + c].copy_from_slice(&image[at..at + c]);
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+            let cols = Tensor::from_vec(cols, (b * ho * wo, 9 * c), x.device())?;
+            let mut y: Vec<f32> = cols
+                .matmul(&conv.linear.w.detach())?
+                .flatten_all()?
+                .to_vec1()?;
+            let bias: Vec<f32> = conv.linear.b.to_vec1()?;
+            for row in y.chunks_exact_mut(bias.len()) {
+                for (v, &bb) in row.iter_mut().zip(&bias) {
+                    *v = (*v + bb).max(0.0);
+                }
+            }
+            (act, h, w, c) = (y, ho, wo, bias.len());
+        }
+        Ok(Tensor::from_vec(act, (b, h, w, c), x.device())?)
+    }
 }
 
 pub(crate) fn validate_convs(specs: &[ConvSpec], what: &str) -> Result<()> {
@@ -402,6 +450,38 @@ pub(crate) fn sample_features(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The inference path of a conv stack (plain loops around one matmul per layer) equals the
+    /// tracked one, with dilations, a stride and a non-square map, biases non-zero.
+    #[test]
+    fn conv_stack_inference_matches_the_tracked_forward() -> Result<()> {
+        let dev = Device::Cpu;
+        let mut store = ParamStore::new(11, &dev);
+        let specs = [
+            ConvSpec::new(5, 1),
+            ConvSpec::new(6, 2),
+            ConvSpec {
+                channels: 4,
+                dilation: 1,
+                stride: 2,
+            },
+            ConvSpec::new(3, 3),
+        ];
+        let stack = ConvStack::new(&mut store, "enc", 3, &specs)?;
+        for (var, name) in store.vars().iter().zip(store.names()) {
+            if name.ends_with("bias") {
+                var.set(&Tensor::randn(0f32, 0.3, var.dims(), &dev)?)?;
+            }
+        }
+        let x = Tensor::randn(0f32, 1.0, (2, 9, 7, 3), &dev)?;
+        let tracked = stack.forward(&x, &IndexCache::default())?;
+        let fast = stack.forward_inference(&x)?;
+        assert_eq!(tracked.dims(), fast.dims());
+        assert_eq!(fast.dims(), &[2, 5, 4, 3]);
+        let diff = (tracked - fast)?.abs()?.max_all()?.to_scalar::<f32>()?;
+        assert!(diff < 1e-4, "max difference {diff}");
+        Ok(())
+    }
 
     /// The im2col convolution equals candle's direct conv2d (NCHW) for every dilation and
     /// stride the encoders use.

@@ -855,8 +855,12 @@ impl FieldNet {
                 },
                 ModelConfig::Context(c),
             ) => {
-                let mut features =
-                    encoder.forward(&self.grid_input(batch, c.goal_channel)?, &self.cache)?;
+                let input = self.grid_input(batch, c.goal_channel)?;
+                let mut features = if track {
+                    encoder.forward(&input, &self.cache)?
+                } else {
+                    encoder.forward_inference(&input)?
+                };
                 if let Some(p) = propagation {
                     // The propagated values do not depend on the queries: without training
                     // they need no gradient.
