@@ -78,7 +78,7 @@ struct Args {
     #[arg(long, default_value = "reciprocal")]
     encoding: String,
     /// Context encoder convolutions as CHANNELS:DILATION, comma-separated (default: the
-    /// library's 7-layer dilated encoder).
+    /// library's 11-layer dilated encoder).
     #[arg(long)]
     encoder: Option<String>,
     /// Add value-iteration layers with this many Q channels to the context encoder (0: none).
@@ -293,30 +293,36 @@ fn main() -> Result<()> {
     bar.set_position(trainer.step());
     let val_for_training = (sizes.len() == 1).then(|| &validation[0]);
     let mut last_val = None;
-    let summary = trainer.run(&datasets, val_for_training, Some(&ckpt), |p| {
-        bar.set_position(p.step);
-        if let Some(v) = p.validation {
-            last_val = Some(v);
-        }
-        if bar.is_hidden() && (p.validation.is_some() || p.checkpointed) {
-            eprintln!(
-                "step {}/{} loss {:.4} val {} {:.2} steps/s {:.0} s",
-                p.step,
-                p.steps,
-                p.loss,
-                last_val.map_or("-".into(), |v| format!("{v:.4}")),
-                p.steps_per_second,
-                p.elapsed.as_secs_f64()
-            );
-        }
-        bar.set_message(format!(
-            "loss {:.4} val {} {:.2} steps/s",
-            p.loss,
-            last_val.map_or("-".into(), |v| format!("{v:.4}")),
-            p.steps_per_second
-        ));
-        args.stop_at.is_none_or(|stop| p.step < stop)
-    })?;
+    // A run resumed at or past --stop-at only writes the weights out (no extra step).
+    let stopped = args.stop_at.is_some_and(|stop| trainer.step() >= stop);
+    let summary = (!stopped)
+        .then(|| {
+            trainer.run(&datasets, val_for_training, Some(&ckpt), |p| {
+                bar.set_position(p.step);
+                if let Some(v) = p.validation {
+                    last_val = Some(v);
+                }
+                if bar.is_hidden() && (p.validation.is_some() || p.checkpointed) {
+                    eprintln!(
+                        "step {}/{} loss {:.4} val {} {:.2} steps/s {:.0} s",
+                        p.step,
+                        p.steps,
+                        p.loss,
+                        last_val.map_or("-".into(), |v| format!("{v:.4}")),
+                        p.steps_per_second,
+                        p.elapsed.as_secs_f64()
+                    );
+                }
+                bar.set_message(format!(
+                    "loss {:.4} val {} {:.2} steps/s",
+                    p.loss,
+                    last_val.map_or("-".into(), |v| format!("{v:.4}")),
+                    p.steps_per_second
+                ));
+                args.stop_at.is_none_or(|stop| p.step < stop)
+            })
+        })
+        .transpose()?;
     bar.finish();
     let net = trainer.into_net();
     net.save(&args.out)?;
@@ -325,7 +331,9 @@ fn main() -> Result<()> {
         args.out.display(),
         ckpt.display()
     );
-    println!("{}", serde_json::to_string(&summary)?);
+    if let Some(summary) = summary {
+        println!("{}", serde_json::to_string(&summary)?);
+    }
     // Navigation on held-out mazes (for plain/goal, the training maze itself).
     for (k, &size) in sizes.iter().enumerate() {
         let val_loss = envfield::nets::validation_loss(&net, &validation[k], 256)?;

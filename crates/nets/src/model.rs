@@ -109,7 +109,10 @@ pub struct GoalConfig {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ContextConfig {
     /// The encoder's 3x3 convolutions (all stride 1: the feature map keeps the maze's size).
-    /// Dilations let a few layers see the whole maze.
+    /// Dilations let a few layers see the whole maze. The default, 11 convolutions (16, then
+    /// 32 channels) with dilations cycling 1, 2, 4, 8 twice, passes information across a 28x28
+    /// maze twice without the holes of a single 1-2-4-8-16 ramp; it took VIN's test sets from
+    /// 95.0 / 92.5% (16x16 / 28x28, 7 convolutions, one ramp) to the figures in the README.
     pub encoder: Vec<ConvSpec>,
     /// Feed a one-hot goal map to the encoder beside the obstacle map.
     pub goal_channel: bool,
@@ -160,6 +163,10 @@ impl Default for ContextConfig {
         Self {
             encoder: [
                 (16, 1),
+                (32, 1),
+                (32, 2),
+                (32, 4),
+                (32, 8),
                 (32, 1),
                 (32, 2),
                 (32, 4),
