@@ -387,29 +387,33 @@ pub struct Batch {
 impl Batch {
     /// Every cell of `grid` as a query for `goal` (row-major order).
     pub fn whole_grid(grid: &Grid2, goal: Cell2) -> Self {
-        let queries = (0..grid.len())
-            .flat_map(|i| {
-                let c = grid.cell(i);
-                [c.row as f32, c.col as f32]
-            })
-            .collect();
-        Self {
-            extent: vec![grid.rows(), grid.cols()],
-            items: 1,
-            obstacles: obstacle_map(grid),
-            goals: vec![goal.row as f32, goal.col as f32],
-            per_item: grid.len(),
-            queries,
-        }
+        let queries = (0..grid.len()).map(|i| grid.cell(i));
+        Self::on_grid(
+            grid,
+            goal,
+            queries.flat_map(|c| [c.row as f32, c.col as f32]),
+        )
     }
 
     /// Every free cell of `grid` as a query for `goal` (row-major order): what a field needs,
     /// since obstacles are infinite whatever the network says.
     pub fn free_cells(grid: &Grid2, goal: Cell2) -> Self {
-        let queries = grid
-            .free_cells()
-            .flat_map(|c| [c.row as f32, c.col as f32])
-            .collect::<Vec<_>>();
+        let queries = grid.free_cells();
+        Self::on_grid(
+            grid,
+            goal,
+            queries.flat_map(|c| [c.row as f32, c.col as f32]),
+        )
+    }
+
+    /// Continuous points of one 2D grid and goal.
+    pub fn points(grid: &Grid2, goal: Cell2, points: &[Point2]) -> Self {
+        Self::on_grid(grid, goal, points.iter().flat_map(|p| [p.row, p.col]))
+    }
+
+    /// One item: `grid` and `goal` with the `(row, col)` query coordinates `queries`.
+    fn on_grid(grid: &Grid2, goal: Cell2, queries: impl Iterator<Item = f32>) -> Self {
+        let queries: Vec<f32> = queries.collect();
         Self {
             extent: vec![grid.rows(), grid.cols()],
             items: 1,
@@ -417,18 +421,6 @@ impl Batch {
             goals: vec![goal.row as f32, goal.col as f32],
             per_item: queries.len() / 2,
             queries,
-        }
-    }
-
-    /// Continuous points of one 2D grid and goal.
-    pub fn points(grid: &Grid2, goal: Cell2, points: &[Point2]) -> Self {
-        Self {
-            extent: vec![grid.rows(), grid.cols()],
-            items: 1,
-            obstacles: obstacle_map(grid),
-            goals: vec![goal.row as f32, goal.col as f32],
-            per_item: points.len(),
-            queries: points.iter().flat_map(|p| [p.row, p.col]).collect(),
         }
     }
 
@@ -832,8 +824,9 @@ impl FieldNet {
 
     /// The raw outputs (N,) for `batch`. `queries` must be the batch's query coordinates as
     /// an (N, d) tensor (a [`Var`] when input gradients are wanted). With `track` false, the
-    /// parts that do not depend on the queries (value iteration) skip the autograd graph:
-    /// right for inference and query gradients, not for training the weights.
+    /// parts that do not depend on the queries (the context encoder and value iteration) skip
+    /// the autograd graph: right for inference and query gradients, not for training the
+    /// weights.
     fn forward_with(&self, batch: &Batch, queries: &Tensor, track: bool) -> Result<Tensor> {
         let d = batch.extent.len();
         let n = batch.len();
