@@ -1,6 +1,7 @@
 //! Building blocks: coordinate encodings, MLPs with ReLU or sine activations, convolutions
 //! written as im2col + matrix multiply (channels-last), and bilinear feature sampling.
 
+use crate::kernel::{conv3x3_relu, ConvShape};
 use crate::params::{Init, ParamStore};
 use crate::{NetsError, Result};
 use candle_core::{Device, Tensor};
@@ -323,50 +324,32 @@ impl ConvStack {
         Ok(h)
     }
 
-    /// [`ConvStack::forward`] without autograd, for prediction: the im2col gather, bias and
-    /// ReLU run as plain loops over one buffer per layer, and only the matrix multiply goes
-    /// through candle. Same result as `forward` up to the order of float additions.
+    /// [`ConvStack::forward`] without autograd, for prediction: each layer is one direct
+    /// convolution with bias and ReLU ([`crate::kernel::conv3x3_relu`]) over a plain buffer.
+    /// Same result as `forward` up to the order of float additions.
     pub(crate) fn forward_inference(&self, x: &Tensor) -> Result<Tensor> {
         let (b, mut h, mut w, mut c) = x.dims4()?;
         let mut act: Vec<f32> = x.flatten_all()?.to_vec1()?;
         for conv in &self.convs {
-            let (d, s) = (conv.spec.dilation as isize, conv.spec.stride);
-            let (ho, wo) = ((h - 1) / s + 1, (w - 1) / s + 1);
-            let mut cols = vec![0.0f32; b * ho * wo * 9 * c];
-            let mut rows = cols.chunks_exact_mut(9 * c);
-            for image in act.chunks_exact(h * w * c) {
-                for oy in 0..ho {
-                    for ox in 0..wo {
-                        let row = rows.next().expect("one im2col row per output cell");
-                        for ky in 0..3 {
-                            let iy = (oy * s) as isize + (ky - 1) * d;
-                            if iy < 0 || iy as usize >= h {
-                                continue;
-                            }
-                            for kx in 0..3 {
-                                let ix = (ox * s) as isize + (kx - 1) * d;
-                                if ix >= 0 && (ix as usize) < w {
-                                    let at = (iy as usize * w + ix as usize) * c;
-                                    let tap = (ky * 3 + kx) as usize * c;
-                                    row[tap..tap + c].copy_from_slice(&image[at..at + c]);
-                                }
-                            }
-                        }
-                    }
-                }
-            }
-            let cols = Tensor::from_vec(cols, (b * ho * wo, 9 * c), x.device())?;
-            let mut y: Vec<f32> = cols
-                .matmul(&conv.linear.w.detach())?
-                .flatten_all()?
-                .to_vec1()?;
+            let shape = ConvShape {
+                h,
+                w,
+                c,
+                co: conv.spec.channels,
+                dilation: conv.spec.dilation,
+                stride: conv.spec.stride,
+            };
+            let (ho, wo) = shape.out_hw();
+            let weight: Vec<f32> = conv.linear.w.flatten_all()?.to_vec1()?;
             let bias: Vec<f32> = conv.linear.b.to_vec1()?;
-            for row in y.chunks_exact_mut(bias.len()) {
-                for (v, &bb) in row.iter_mut().zip(&bias) {
-                    *v = (*v + bb).max(0.0);
-                }
+            let mut y = vec![0.0f32; b * ho * wo * shape.co];
+            for (image, out) in act
+                .chunks_exact(h * w * c)
+                .zip(y.chunks_exact_mut(ho * wo * shape.co))
+            {
+                conv3x3_relu(shape, image, &weight, &bias, out);
             }
-            (act, h, w, c) = (y, ho, wo, bias.len());
+            (act, h, w, c) = (y, ho, wo, shape.co);
         }
         Ok(Tensor::from_vec(act, (b, h, w, c), x.device())?)
     }

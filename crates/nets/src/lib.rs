@@ -31,6 +31,7 @@
 //! ```
 
 mod error;
+mod kernel;
 mod layers;
 mod model;
 mod params;
