@@ -98,6 +98,14 @@ struct Args {
     /// goal: the path bends around obstacles). Also applies to a resumed run.
     #[arg(long)]
     detour_fraction: Option<f64>,
+    /// Weight of the descent loss (0: off): queries in groups of a cell and its 8 neighbours;
+    /// each move other than the best ones should score below the best by --descent-margin
+    /// (hinge). Needs --queries divisible by 9. Also applies to a resumed run.
+    #[arg(long)]
+    descent_weight: Option<f64>,
+    /// Margin of the descent loss in output units (linear:100 -> 0.01 per cell)
+    #[arg(long, default_value_t = 0.005)]
+    descent_margin: f64,
     /// Stop (with a checkpoint) at this step, before --steps; the learning-rate schedule still
     /// follows --steps, so a later --resume continues the same run.
     #[arg(long)]
@@ -195,6 +203,9 @@ fn main() -> Result<()> {
             if let Some(f) = args.detour_fraction {
                 t.set_detour_fraction(f)?;
             }
+            if let Some(w) = args.descent_weight {
+                t.set_descent(w, args.descent_margin, rule)?;
+            }
             eprintln!("resumed {} at step {}", path.display(), t.step());
             t
         }
@@ -269,6 +280,9 @@ fn main() -> Result<()> {
                 validation_samples: 64,
                 neighbour_weight: args.neighbour_weight.unwrap_or(0.0),
                 detour_fraction: args.detour_fraction.unwrap_or(0.0),
+                descent_weight: args.descent_weight.unwrap_or(0.0),
+                descent_margin: args.descent_margin,
+                descent_rule: rule,
                 ..TrainConfig::default()
             };
             Trainer::new(FieldNet::new(model, args.seed)?, train)?

@@ -6,6 +6,7 @@ use crate::params::{AdamW, TensorFile, META_STEP};
 use crate::{NetsError, Result};
 use candle_core::{Device, Tensor};
 use envfield_grid::synth::SplitMix64;
+use envfield_grid::{Cell2, MoveRule, DIRECTIONS_8};
 use envfield_mazes::{Dataset, Sample};
 use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
@@ -13,6 +14,9 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 
 const META_TRAIN: &str = "envfield.train";
+
+/// Queries per group of the descent loss: an anchor cell and its 8 neighbours.
+const GROUP: usize = 9;
 
 /// How to train. Serialised into every checkpoint.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -56,6 +60,22 @@ pub struct TrainConfig {
     /// over the grid. 0 (the default) samples uniformly.
     #[serde(default)]
     pub detour_fraction: f64,
+    /// Weight of the descent loss. Queries then come in groups of nine: an anchor cell and its
+    /// 8 neighbours (a neighbour that is not a move under `descent_rule` is replaced by the
+    /// anchor and left out). Descent steps to the neighbour of best output, so each neighbour
+    /// that is not among the best moves (least true distance) should score below the best of
+    /// the best moves by at least `descent_margin` (or by its true gap, when smaller); the loss
+    /// is the hinge `max(0, margin - (best - other))` summed over those neighbours and averaged
+    /// over the groups. It trains the decision the planner makes, and the exact field scores
+    /// zero on it, so it does not pull against the L1 loss. The neighbour-difference loss
+    /// (between the anchor and each neighbour in this mode) still applies. Needs
+    /// `queries_per_item` divisible by 9. 0 disables it.
+    pub descent_weight: f64,
+    /// The margin of the descent loss, in output units: under the linear encoding `1 - d/100`
+    /// one cell is 0.01, so the default 0.005 is half a cell.
+    pub descent_margin: f64,
+    /// The move rule of the descent loss (which neighbours are moves).
+    pub descent_rule: MoveRule,
 }
 
 impl Default for TrainConfig {
@@ -75,6 +95,9 @@ impl Default for TrainConfig {
             validation_samples: 256,
             neighbour_weight: 0.0,
             detour_fraction: 0.0,
+            descent_weight: 0.0,
+            descent_margin: 0.005,
+            descent_rule: MoveRule::Strict,
         }
     }
 }
@@ -97,17 +120,26 @@ impl TrainConfig {
             && self.validation_samples > 0
             && self.neighbour_weight >= 0.0
             && (self.neighbour_weight == 0.0 || self.queries_per_item % 2 == 0)
-            && (0.0..=1.0).contains(&self.detour_fraction);
+            && (0.0..=1.0).contains(&self.detour_fraction)
+            && self.descent_weight >= 0.0
+            && (self.descent_weight == 0.0 || self.queries_per_item % GROUP == 0)
+            && self.descent_margin > 0.0;
         if ok {
             Ok(())
         } else {
             Err(NetsError::InvalidConfig(format!(
                 "training: need lr > 0, final_lr_fraction in [0, 1], betas in [0, 1), eps > 0, \
                  weight_decay >= 0, batch_items, queries_per_item and validation_samples >= 1, \
-                 neighbour_weight >= 0 with an even queries_per_item, detour_fraction in [0, 1] \
-                 (got {self:?})"
+                 neighbour_weight >= 0 with an even queries_per_item, detour_fraction in [0, 1], \
+                 descent_weight >= 0 with queries_per_item a multiple of 9, \
+                 descent_margin > 0 (got {self:?})"
             )))
         }
+    }
+
+    /// Whether queries come in groups of an anchor and its 8 neighbours.
+    fn grouped(&self) -> bool {
+        self.descent_weight > 0.0
     }
 
     /// The learning rate at `step` (0-based).
@@ -277,6 +309,20 @@ impl Trainer {
         self.update_config(|c| c.detour_fraction = fraction)
     }
 
+    /// Sets the descent loss (see [`TrainConfig::descent_weight`]): its weight, margin and
+    /// move rule, for example to fine-tune a resumed run with it.
+    ///
+    /// # Errors
+    /// [`NetsError::InvalidConfig`] for a negative weight, a margin that is not positive, or
+    /// `queries_per_item` not divisible by 9.
+    pub fn set_descent(&mut self, weight: f64, margin: f64, rule: MoveRule) -> Result<()> {
+        self.update_config(|c| {
+            c.descent_weight = weight;
+            c.descent_margin = margin;
+            c.descent_rule = rule;
+        })
+    }
+
     /// Sets the total number of steps (to train a resumed run further).
     pub fn set_steps(&mut self, steps: u64) {
         self.config.steps = steps;
@@ -316,7 +362,16 @@ impl Trainer {
         let pred = self.net.forward(batch)?;
         let target = Tensor::from_vec(targets.to_vec(), targets.len(), self.net.device())?;
         let mut loss = (&pred - &target)?.abs()?.mean_all()?;
-        if self.config.neighbour_weight > 0.0 && batch.len() % 2 == 0 {
+        if self.config.grouped() {
+            let groups = Groups::new(batch, targets, self.config.descent_margin as f32)?;
+            if self.config.neighbour_weight > 0.0 {
+                let slope = groups.slope_loss(&pred)?;
+                loss = (loss + (slope * self.config.neighbour_weight)?)?;
+            }
+            if let Some(descent) = groups.descent_loss(&pred)? {
+                loss = (loss + (descent * self.config.descent_weight)?)?;
+            }
+        } else if self.config.neighbour_weight > 0.0 && batch.len() % 2 == 0 {
             let pairs = batch.len() / 2;
             let mask: Vec<f32> = targets
                 .chunks_exact(2)
@@ -389,24 +444,48 @@ impl Trainer {
             } else {
                 Vec::new()
             };
-            for k in 0..q {
-                let i = if pairs && k % 2 == 1 {
-                    // A random in-bounds neighbour of the previous query.
-                    let prev = (batch.queries[batch.queries.len() - 2] as usize) * cols
-                        + batch.queries[batch.queries.len() - 1] as usize;
-                    let (r, c) = (prev / cols, prev % cols);
-                    loop {
-                        let (dr, dc) = envfield_grid::DIRECTIONS_8[rng.below(8)];
-                        let (nr, nc) = (r as isize + dr, c as isize + dc);
-                        if nr >= 0 && nc >= 0 && (nr as usize) < rows && (nc as usize) < cols {
-                            break nr as usize * cols + nc as usize;
-                        }
-                    }
-                } else if !detours.is_empty() && rng.next_f64() < self.config.detour_fraction {
+            let anchor = |rng: &mut SplitMix64| {
+                if !detours.is_empty() && rng.next_f64() < self.config.detour_fraction {
                     detours[rng.below(detours.len())]
                 } else {
                     rng.below(rows * cols)
-                };
+                }
+            };
+            let mut cells = Vec::with_capacity(q);
+            if self.config.grouped() {
+                // An anchor, then its 8 neighbours in `DIRECTIONS_8` order; the anchor again
+                // where a neighbour is not a move.
+                let rule = self.config.descent_rule;
+                for _ in 0..q / GROUP {
+                    let i = anchor(&mut rng);
+                    let from = Cell2::new(i / cols, i % cols);
+                    cells.push(i);
+                    cells.extend(DIRECTIONS_8.iter().map(|&(dr, dc)| {
+                        if rule.allows(&s.grid, from, dr, dc) {
+                            (i as isize + dr * cols as isize + dc) as usize
+                        } else {
+                            i
+                        }
+                    }));
+                }
+            } else {
+                for k in 0..q {
+                    cells.push(if pairs && k % 2 == 1 {
+                        // A random in-bounds neighbour of the previous query.
+                        let (r, c) = (cells[k - 1] / cols, cells[k - 1] % cols);
+                        loop {
+                            let (dr, dc) = DIRECTIONS_8[rng.below(8)];
+                            let (nr, nc) = (r as isize + dr, c as isize + dc);
+                            if nr >= 0 && nc >= 0 && (nr as usize) < rows && (nc as usize) < cols {
+                                break nr as usize * cols + nc as usize;
+                            }
+                        }
+                    } else {
+                        anchor(&mut rng)
+                    });
+                }
+            }
+            for i in cells {
                 batch.queries.extend([(i / cols) as f32, (i % cols) as f32]);
                 targets.push(reencode(encoding, s.target[i]));
             }
@@ -507,6 +586,129 @@ impl Trainer {
     }
 }
 
+/// The groups of a batch sampled for the descent loss (anchor, then 8 neighbours), read back
+/// from the queries and targets, each as (groups, 8) masks and values: which neighbours are
+/// moves, how much each should rise above the anchor, which are the best moves, and by how much
+/// each other move should score below them.
+struct Groups {
+    count: usize,
+    /// 1 where neighbour `j` of group `g` (at `g * 8 + j`) is a reachable move.
+    valid: Vec<f32>,
+    /// True encoded output of the neighbour minus the anchor's.
+    rise: Vec<f32>,
+    /// 1 for the best moves (least true distance), in groups with a decision to make.
+    winner: Vec<f32>,
+    /// 1 for the other moves of those groups.
+    other: Vec<f32>,
+    /// The margin each other move should keep below the best: `margin.min(true gap)`.
+    margin: Vec<f32>,
+    /// Groups whose anchor is reachable, not the goal, and has a move.
+    decisions: usize,
+}
+
+impl Groups {
+    fn new(batch: &Batch, targets: &[f32], margin: f32) -> Result<Self> {
+        if batch.len() % GROUP != 0 || batch.per_item % GROUP != 0 {
+            return Err(NetsError::InvalidInput(format!(
+                "the descent loss needs queries in groups of {GROUP} per item (got {} per item)",
+                batch.per_item
+            )));
+        }
+        let count = batch.len() / GROUP;
+        let n = GROUP - 1;
+        let zeros = || vec![0f32; count * n];
+        let mut groups = Self {
+            count,
+            valid: zeros(),
+            rise: zeros(),
+            winner: zeros(),
+            other: zeros(),
+            margin: zeros(),
+            decisions: 0,
+        };
+        for g in 0..count {
+            let t = &targets[g * GROUP..][..GROUP];
+            let q = &batch.queries[2 * g * GROUP..][..2 * GROUP];
+            let item = g * GROUP / batch.per_item;
+            let at_goal = q[..2] == batch.goals[2 * item..][..2];
+            let row = g * n..(g + 1) * n;
+            let valid = &mut groups.valid[row.clone()];
+            for j in 0..n {
+                let moved = q[2 * j + 2..][..2] != q[..2];
+                if t[0] >= 0.0 && t[j + 1] >= 0.0 && moved {
+                    valid[j] = 1.0;
+                    groups.rise[g * n + j] = t[j + 1] - t[0];
+                }
+            }
+            let best = (0..n)
+                .filter(|&j| valid[j] > 0.0)
+                .map(|j| t[j + 1])
+                .fold(f32::NEG_INFINITY, f32::max);
+            if best == f32::NEG_INFINITY || at_goal {
+                continue;
+            }
+            for j in (0..n).filter(|&j| valid[j] > 0.0) {
+                // Ties within float noise of the encoding are all best moves.
+                let gap = best - t[j + 1];
+                if gap <= 1e-6 {
+                    groups.winner[g * n + j] = 1.0;
+                } else {
+                    groups.other[g * n + j] = 1.0;
+                    groups.margin[g * n + j] = gap.min(margin);
+                }
+            }
+            groups.decisions += 1;
+        }
+        Ok(groups)
+    }
+
+    /// (groups, 8) values as a tensor on `device`.
+    fn tensor(&self, values: &[f32], device: &Device) -> Result<Tensor> {
+        Ok(Tensor::from_vec(
+            values.to_vec(),
+            (self.count, GROUP - 1),
+            device,
+        )?)
+    }
+
+    /// The anchor's and the neighbours' outputs, (groups, 1) and (groups, 8), of the batch's
+    /// outputs `pred` (one per query).
+    fn split(&self, pred: &Tensor) -> Result<(Tensor, Tensor)> {
+        let pred = pred.reshape((self.count, GROUP))?;
+        Ok((pred.narrow(1, 0, 1)?, pred.narrow(1, 1, GROUP - 1)?))
+    }
+
+    /// Mean L1 error of each move's predicted rise above its anchor.
+    fn slope_loss(&self, pred: &Tensor) -> Result<Tensor> {
+        let (anchor, neighbours) = self.split(pred)?;
+        let truth = self.tensor(&self.rise, pred.device())?;
+        let err = (neighbours.broadcast_sub(&anchor)? - truth)?.abs()?;
+        let valid = self.tensor(&self.valid, pred.device())?;
+        let pairs = self.valid.iter().sum::<f32>().max(1.0);
+        Ok(((err * valid)?.sum_all()? / pairs as f64)?)
+    }
+
+    /// The descent hinge (see [`TrainConfig::descent_weight`]) averaged over the groups with a
+    /// decision; `None` when no group has one.
+    fn descent_loss(&self, pred: &Tensor) -> Result<Option<Tensor>> {
+        if self.decisions == 0 {
+            return Ok(None);
+        }
+        let device = pred.device();
+        let (_, neighbours) = self.split(pred)?;
+        // The best output among the best moves (others pushed far below), then each other
+        // move's shortfall from the margin.
+        let shut = ((self.tensor(&self.winner, device)? - 1.0)? * 1e4)?;
+        let best = (&neighbours + shut)?.max_keepdim(1)?;
+        let gap = best.broadcast_sub(&neighbours)?;
+        let hinge = (self.tensor(&self.margin, device)? - gap)?.relu()?;
+        let others = self.tensor(&self.other, device)?;
+        Ok(Some(
+            ((hinge * others)?.sum_all()? / self.decisions as f64)?,
+        ))
+    }
+}
+
 /// The reachable cells of `s` whose distance exceeds the octile distance to the goal by more
 /// than half a cell.
 fn detour_cells(s: &Sample) -> Vec<usize> {
@@ -571,4 +773,84 @@ pub fn validation_loss(net: &FieldNet, data: &Dataset, limit: usize) -> Result<f
         count += pred.len();
     }
     Ok((total / count.max(1) as f64) as f32)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 3x3 room, goal in the top-right corner, one group anchored at the centre under the
+    /// linear encoding `1 - d/100`: slot 2 (left) is not a move (the anchor again), slot 4
+    /// (top-left) is blocked, slot 5 (top-right) is the goal and the only best move.
+    fn one_group(anchor_at_goal: bool) -> (Batch, Vec<f32>) {
+        let t = |d: f32| 1.0 - d / 100.0;
+        let s2 = std::f32::consts::SQRT_2;
+        let mut queries = vec![1.0, 1.0, 0.0, 1.0, 2.0, 1.0, 1.0, 1.0, 1.0, 2.0];
+        queries.extend([0.0, 0.0, 0.0, 2.0, 2.0, 0.0, 2.0, 2.0]);
+        let targets = vec![
+            t(s2),
+            t(1.0),
+            t(1.0 + s2),
+            t(s2),
+            t(1.0),
+            -1.0,
+            t(0.0),
+            t(2.0 * s2),
+            t(2.0),
+        ];
+        let goal = if anchor_at_goal {
+            [1.0, 1.0]
+        } else {
+            [0.0, 2.0]
+        };
+        let batch = Batch {
+            extent: vec![3, 3],
+            items: 1,
+            obstacles: vec![0.0; 9],
+            goals: goal.to_vec(),
+            per_item: GROUP,
+            queries,
+        };
+        (batch, targets)
+    }
+
+    #[test]
+    fn groups_read_back_moves_best_moves_and_margins() {
+        let (batch, targets) = one_group(false);
+        let g = Groups::new(&batch, &targets, 0.005).unwrap();
+        assert_eq!(g.decisions, 1);
+        assert_eq!(g.valid, [1.0, 1.0, 0.0, 1.0, 0.0, 1.0, 1.0, 1.0]);
+        assert_eq!(g.winner, [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0]);
+        assert_eq!(g.other, [1.0, 1.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0]);
+        for (j, &m) in g.margin.iter().enumerate() {
+            assert_eq!(m, if g.other[j] > 0.0 { 0.005 } else { 0.0 }, "slot {j}");
+        }
+        // Standing on the goal there is no decision.
+        let (batch, targets) = one_group(true);
+        assert_eq!(Groups::new(&batch, &targets, 0.005).unwrap().decisions, 0);
+    }
+
+    #[test]
+    fn the_exact_field_scores_zero_and_a_wrong_ranking_pays_its_shortfall() {
+        let (batch, targets) = one_group(false);
+        let g = Groups::new(&batch, &targets, 0.005).unwrap();
+        let loss = |pred: &[f32]| -> (f32, f32) {
+            let pred = Tensor::from_vec(pred.to_vec(), pred.len(), &Device::Cpu).unwrap();
+            let descent = g.descent_loss(&pred).unwrap().unwrap();
+            let slope = g.slope_loss(&pred).unwrap();
+            (
+                descent.to_scalar::<f32>().unwrap(),
+                slope.to_scalar::<f32>().unwrap(),
+            )
+        };
+        assert_eq!(loss(&targets), (0.0, 0.0));
+        // The top neighbour (slot 0) now scores 0.001 above the goal: a shortfall of 0.006.
+        let mut wrong = targets.clone();
+        wrong[1] = targets[6] + 0.001;
+        let (descent, slope) = loss(&wrong);
+        assert!((descent - 0.006).abs() < 1e-6, "{descent}");
+        // Its rise above the anchor is off by the same change, over 6 moves.
+        let change = wrong[1] - targets[1];
+        assert!((slope - change / 6.0).abs() < 1e-6, "{slope}");
+    }
 }

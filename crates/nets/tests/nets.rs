@@ -464,3 +464,73 @@ fn detour_sampling_draws_cells_behind_obstacles() {
     }
     assert_eq!(drawn, 5 * 6 * 40);
 }
+
+/// With a descent weight, queries come in groups of nine: an anchor, then each neighbour in
+/// `DIRECTIONS_8` order that the rule allows as a move, the anchor itself in the other slots;
+/// a query count not divisible by 9 is a config error, and training runs.
+#[test]
+fn descent_loss_groups_an_anchor_with_its_moves() {
+    let data = dataset(8, 4, 2, 5);
+    let cfg = TrainConfig {
+        lr: 1e-3,
+        batch_items: 3,
+        queries_per_item: 18,
+        steps: 3,
+        neighbour_weight: 2.0,
+        descent_weight: 5.0,
+        descent_rule: MoveRule::Strict,
+        checkpoint_every: 0,
+        validate_every: 0,
+        ..TrainConfig::default()
+    };
+    let net = || FieldNet::new(ModelConfig::Context(small_context()), 3).unwrap();
+    for bad in [
+        TrainConfig {
+            queries_per_item: 20,
+            ..cfg.clone()
+        },
+        TrainConfig {
+            descent_margin: 0.0,
+            ..cfg.clone()
+        },
+    ] {
+        assert!(matches!(
+            Trainer::new(net(), bad),
+            Err(NetsError::InvalidConfig(_))
+        ));
+    }
+    let mut trainer = Trainer::new(net(), cfg).unwrap();
+    let (batch, targets) = trainer.sample_batch(&data, 0).unwrap();
+    assert_eq!(targets.len(), 54);
+    let mut moves = 0;
+    for (k, group) in batch.queries.chunks_exact(18).enumerate() {
+        let item = k / 2;
+        let grid = data
+            .samples
+            .iter()
+            .map(|s| &s.grid)
+            .find(|g| {
+                g.obstacles()
+                    .iter()
+                    .map(|&o| o as u8 as f32)
+                    .eq(batch.obstacles[item * 64..(item + 1) * 64].iter().copied())
+            })
+            .expect("the item's grid");
+        let anchor = Cell2::new(group[0] as usize, group[1] as usize);
+        for (j, &(dr, dc)) in envfield_grid::DIRECTIONS_8.iter().enumerate() {
+            let slot = (group[2 * j + 2], group[2 * j + 3]);
+            if MoveRule::Strict.allows(grid, anchor, dr, dc) {
+                let want = (anchor.row as isize + dr, anchor.col as isize + dc);
+                assert_eq!(slot, (want.0 as f32, want.1 as f32), "group {k} slot {j}");
+                moves += 1;
+            } else {
+                assert_eq!(slot, (group[0], group[1]), "group {k} slot {j}");
+            }
+        }
+    }
+    assert!(moves > 0);
+    let summary = trainer
+        .run(std::slice::from_ref(&data), None, None, |_| true)
+        .unwrap();
+    assert!(summary.loss.is_finite());
+}
