@@ -119,7 +119,7 @@ impl TrainConfig {
             && self.queries_per_item > 0
             && self.validation_samples > 0
             && self.neighbour_weight >= 0.0
-            && (self.neighbour_weight == 0.0 || self.queries_per_item % 2 == 0)
+            && (self.neighbour_weight == 0.0 || self.grouped() || self.queries_per_item % 2 == 0)
             && (0.0..=1.0).contains(&self.detour_fraction)
             && self.descent_weight >= 0.0
             && (self.descent_weight == 0.0 || self.queries_per_item % GROUP == 0)
@@ -130,7 +130,7 @@ impl TrainConfig {
             Err(NetsError::InvalidConfig(format!(
                 "training: need lr > 0, final_lr_fraction in [0, 1], betas in [0, 1), eps > 0, \
                  weight_decay >= 0, batch_items, queries_per_item and validation_samples >= 1, \
-                 neighbour_weight >= 0 with an even queries_per_item, detour_fraction in [0, 1], \
+                 neighbour_weight >= 0 with an even queries_per_item (unless grouped), detour_fraction in [0, 1], \
                  descent_weight >= 0 with queries_per_item a multiple of 9, \
                  descent_margin > 0 (got {self:?})"
             )))

@@ -499,6 +499,12 @@ fn descent_loss_groups_an_anchor_with_its_moves() {
             Err(NetsError::InvalidConfig(_))
         ));
     }
+    // Groups make the neighbour-difference pairs, so an odd count of nine is fine.
+    let odd = TrainConfig {
+        queries_per_item: 27,
+        ..cfg.clone()
+    };
+    assert!(Trainer::new(net(), odd).is_ok());
     let mut trainer = Trainer::new(net(), cfg).unwrap();
     let (batch, targets) = trainer.sample_batch(&data, 0).unwrap();
     assert_eq!(targets.len(), 54);
