@@ -372,19 +372,12 @@ impl Trainer {
                 loss = (loss + (descent * self.config.descent_weight)?)?;
             }
         } else if self.config.neighbour_weight > 0.0 && batch.len() % 2 == 0 {
-            let pairs = batch.len() / 2;
-            let mask: Vec<f32> = targets
+            // (cell, neighbour) pairs: groups of two.
+            let (rise, valid): (Vec<f32>, Vec<f32>) = targets
                 .chunks_exact(2)
-                .map(|t| (t[0] >= 0.0 && t[1] >= 0.0) as u8 as f32)
-                .collect();
-            let reachable = mask.iter().sum::<f32>().max(1.0);
-            let mask = Tensor::from_vec(mask, pairs, self.net.device())?;
-            let diff = |t: &Tensor| -> Result<Tensor> {
-                let t = t.reshape((pairs, 2))?;
-                Ok((t.narrow(1, 1, 1)? - t.narrow(1, 0, 1)?)?.reshape(pairs)?)
-            };
-            let err = (diff(&pred)? - diff(&target)?)?.abs()?;
-            let slope = ((err * mask)?.sum_all()? / reachable as f64)?;
+                .map(|t| (t[1] - t[0], (t[0] >= 0.0 && t[1] >= 0.0) as u8 as f32))
+                .unzip();
+            let slope = rise_loss(&pred, 2, rise, valid)?;
             loss = (loss + (slope * self.config.neighbour_weight)?)?;
         }
         let value = loss.to_scalar::<f32>()?;
@@ -680,12 +673,7 @@ impl Groups {
 
     /// Mean L1 error of each move's predicted rise above its anchor.
     fn slope_loss(&self, pred: &Tensor) -> Result<Tensor> {
-        let (anchor, neighbours) = self.split(pred)?;
-        let truth = self.tensor(&self.rise, pred.device())?;
-        let err = (neighbours.broadcast_sub(&anchor)? - truth)?.abs()?;
-        let valid = self.tensor(&self.valid, pred.device())?;
-        let pairs = self.valid.iter().sum::<f32>().max(1.0);
-        Ok(((err * valid)?.sum_all()? / pairs as f64)?)
+        rise_loss(pred, GROUP, self.rise.clone(), self.valid.clone())
     }
 
     /// The descent hinge (see [`TrainConfig::descent_weight`]) averaged over the groups with a
@@ -707,6 +695,22 @@ impl Groups {
             ((hinge * others)?.sum_all()? / self.decisions as f64)?,
         ))
     }
+}
+
+/// The neighbour-difference loss on outputs `pred` laid out in groups of `size` (an anchor,
+/// then `size - 1` others): the L1 error of each other output's rise above its anchor against
+/// the true `rise`, averaged over the pairs `valid` marks with 1. `rise` and `valid` hold
+/// (groups, size - 1) values.
+fn rise_loss(pred: &Tensor, size: usize, rise: Vec<f32>, valid: Vec<f32>) -> Result<Tensor> {
+    let groups = pred.elem_count() / size;
+    let pred = pred.reshape((groups, size))?;
+    let (anchor, others) = (pred.narrow(1, 0, 1)?, pred.narrow(1, 1, size - 1)?);
+    let pairs = valid.iter().sum::<f32>().max(1.0);
+    let shape = (groups, size - 1);
+    let truth = Tensor::from_vec(rise, shape, pred.device())?;
+    let valid = Tensor::from_vec(valid, shape, pred.device())?;
+    let err = (others.broadcast_sub(&anchor)? - truth)?.abs()?;
+    Ok(((err * valid)?.sum_all()? / pairs as f64)?)
 }
 
 /// The reachable cells of `s` whose distance exceeds the octile distance to the goal by more
