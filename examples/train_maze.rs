@@ -106,6 +106,15 @@ struct Args {
     /// Margin of the descent loss in output units (linear:100 -> 0.01 per cell)
     #[arg(long, default_value_t = 0.005)]
     descent_margin: f64,
+    /// Dense queries: every cell of each maze, and the neighbour-difference and descent losses
+    /// over every reachable cell (--queries and --detour-fraction are then unused). Also
+    /// switches a resumed run to dense queries.
+    #[arg(long)]
+    dense: bool,
+    /// Keep a moving average of the weights with this decay (0.999: about the last 1000
+    /// steps) and export it; checkpoints carry it. Also applies to a resumed run.
+    #[arg(long)]
+    ema: Option<f64>,
     /// Stop (with a checkpoint) at this step, before --steps; the learning-rate schedule still
     /// follows --steps, so a later --resume continues the same run.
     #[arg(long)]
@@ -206,6 +215,12 @@ fn main() -> Result<()> {
             if let Some(w) = args.descent_weight {
                 t.set_descent(w, args.descent_margin, rule)?;
             }
+            if args.dense {
+                t.set_dense(true);
+            }
+            if let Some(decay) = args.ema {
+                t.set_ema_decay(decay)?;
+            }
             eprintln!("resumed {} at step {}", path.display(), t.step());
             t
         }
@@ -283,6 +298,8 @@ fn main() -> Result<()> {
                 descent_weight: args.descent_weight.unwrap_or(0.0),
                 descent_margin: args.descent_margin,
                 descent_rule: rule,
+                dense: args.dense,
+                ema_decay: args.ema.unwrap_or(0.0),
                 ..TrainConfig::default()
             };
             Trainer::new(FieldNet::new(model, args.seed)?, train)?
@@ -338,7 +355,8 @@ fn main() -> Result<()> {
         })
         .transpose()?;
     bar.finish();
-    let net = trainer.into_net();
+    // The moving average of the weights when one is kept.
+    let net = trainer.averaged_net()?;
     net.save(&args.out)?;
     eprintln!(
         "saved {} (checkpoint {})",

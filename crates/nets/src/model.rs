@@ -5,7 +5,7 @@ use crate::layers::{
     Mlp, MlpConfig,
 };
 use crate::params::{
-    to_safetensors, Init, ParamStore, TensorFile, FORMAT, META_CONFIG, META_FORMAT,
+    ema_name, to_safetensors, Init, ParamStore, TensorFile, FORMAT, META_CONFIG, META_FORMAT,
     OPTIMISER_PREFIX,
 };
 use crate::{NetsError, Result};
@@ -1070,7 +1070,9 @@ impl FieldNet {
     }
 
     /// Loads a network saved by [`FieldNet::save`] (or a training checkpoint), rebuilding it
-    /// from the config in the file.
+    /// from the config in the file. A checkpoint that keeps a moving average of the weights
+    /// ([`crate::TrainConfig::ema_decay`]) loads the average: the network that training
+    /// would export at that step.
     ///
     /// # Errors
     /// [`NetsError::Checkpoint`] for an unreadable, truncated or foreign file; the errors of
@@ -1088,7 +1090,27 @@ impl FieldNet {
         let mut file = TensorFile::read(path)?;
         let config = read_config(path, &file)?;
         let mut net = Self::new_on(config, 0, device)?;
+        let names = net.store.names().to_vec();
+        let average = if names
+            .iter()
+            .all(|n| file.tensors.contains_key(&ema_name(n)))
+        {
+            let vars = net.store.vars();
+            let take = |(n, v): (&String, &Var)| file.take(path, &ema_name(n), v.dims(), device);
+            Some(
+                names
+                    .iter()
+                    .zip(vars)
+                    .map(take)
+                    .collect::<Result<Vec<_>>>()?,
+            )
+        } else {
+            None
+        };
         net.take_weights(path, &mut file)?;
+        for (var, t) in net.store.vars().iter().zip(average.into_iter().flatten()) {
+            var.set(&t)?;
+        }
         Ok(net)
     }
 

@@ -167,6 +167,12 @@ pub(crate) const OPTIMISER_PREFIX: &str = "optimiser.";
 /// The metadata key of a checkpoint's step (absent from plain weight files).
 pub(crate) const META_STEP: &str = "envfield.step";
 
+/// The checkpoint name of the moving average of parameter `name` (with the optimiser's
+/// prefix, so weight loaders skip it).
+pub(crate) fn ema_name(name: &str) -> String {
+    format!("{OPTIMISER_PREFIX}ema.{name}")
+}
+
 fn moment_name(kind: char, name: &str) -> String {
     format!("{OPTIMISER_PREFIX}{kind}.{name}")
 }

@@ -2,11 +2,11 @@
 //! resume exactly.
 
 use crate::model::{read_config, Batch, FieldNet, TargetEncoding};
-use crate::params::{AdamW, TensorFile, META_STEP};
+use crate::params::{ema_name, AdamW, TensorFile, META_STEP};
 use crate::{NetsError, Result};
 use candle_core::{Device, Tensor};
 use envfield_grid::synth::SplitMix64;
-use envfield_grid::{Cell2, MoveRule, DIRECTIONS_8};
+use envfield_grid::{Cell2, Grid2, MoveRule, DIRECTIONS_8};
 use envfield_mazes::{Dataset, Sample};
 use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
@@ -76,6 +76,23 @@ pub struct TrainConfig {
     pub descent_margin: f64,
     /// The move rule of the descent loss (which neighbours are moves).
     pub descent_rule: MoveRule,
+    /// Dense queries: every cell of each sampled maze is a query (`queries_per_item` is then
+    /// unused), and the neighbour-difference and descent losses run over every reachable cell
+    /// with its 8 neighbours, gathered from the one field prediction; `detour_fraction` is
+    /// then the share of each maze's weight in those losses that its detour cells carry. One whole field gives a decision per reachable cell, where groups of nine
+    /// queries give one per group: on a 28x28 maze about 500 decisions for 784 queries
+    /// against 42 for 378. Needs nothing of the network (the reachable cells come from the
+    /// targets).
+    #[serde(default)]
+    pub dense: bool,
+    /// Decay of an exponential moving average of the weights, updated after every step
+    /// (`ema = decay * ema + (1 - decay) * weights`, starting from the weights where it is
+    /// switched on); 0 keeps none. [`Trainer::averaged_net`] gives the averaged network, and
+    /// checkpoints carry the average so a resumed run continues it. An average over the last
+    /// `1 / (1 - decay)` steps smooths the step-to-step swings of the decisions descent
+    /// makes, which single checkpoints show.
+    #[serde(default)]
+    pub ema_decay: f64,
 }
 
 impl Default for TrainConfig {
@@ -98,6 +115,8 @@ impl Default for TrainConfig {
             descent_weight: 0.0,
             descent_margin: 0.005,
             descent_rule: MoveRule::Strict,
+            dense: false,
+            ema_decay: 0.0,
         }
     }
 }
@@ -119,11 +138,15 @@ impl TrainConfig {
             && self.queries_per_item > 0
             && self.validation_samples > 0
             && self.neighbour_weight >= 0.0
-            && (self.neighbour_weight == 0.0 || self.grouped() || self.queries_per_item % 2 == 0)
+            && (self.neighbour_weight == 0.0
+                || self.dense
+                || self.grouped()
+                || self.queries_per_item % 2 == 0)
             && (0.0..=1.0).contains(&self.detour_fraction)
             && self.descent_weight >= 0.0
-            && (self.descent_weight == 0.0 || self.queries_per_item % GROUP == 0)
-            && self.descent_margin > 0.0;
+            && (self.descent_weight == 0.0 || self.dense || self.queries_per_item % GROUP == 0)
+            && self.descent_margin > 0.0
+            && (0.0..1.0).contains(&self.ema_decay);
         if ok {
             Ok(())
         } else {
@@ -131,8 +154,8 @@ impl TrainConfig {
                 "training: need lr > 0, final_lr_fraction in [0, 1], betas in [0, 1), eps > 0, \
                  weight_decay >= 0, batch_items, queries_per_item and validation_samples >= 1, \
                  neighbour_weight >= 0 with an even queries_per_item (unless grouped), detour_fraction in [0, 1], \
-                 descent_weight >= 0 with queries_per_item a multiple of 9, \
-                 descent_margin > 0 (got {self:?})"
+                 descent_weight >= 0 with queries_per_item a multiple of 9 (unless dense), \
+                 descent_margin > 0, ema_decay in [0, 1) (got {self:?})"
             )))
         }
     }
@@ -194,6 +217,9 @@ pub struct Trainer {
     net: FieldNet,
     optimiser: AdamW,
     config: TrainConfig,
+    /// The moving average of the weights (see [`TrainConfig::ema_decay`]), one tensor per
+    /// parameter in the store's order.
+    ema: Option<Vec<Tensor>>,
 }
 
 impl Trainer {
@@ -210,10 +236,14 @@ impl Trainer {
             config.eps,
             config.weight_decay,
         )?;
+        let ema = (config.ema_decay > 0.0)
+            .then(|| weights(&net))
+            .transpose()?;
         Ok(Self {
             net,
             optimiser,
             config,
+            ema,
         })
     }
 
@@ -256,9 +286,20 @@ impl Trainer {
         let model = read_config(path, &file)?;
         let mut net = FieldNet::new_on(model, 0, device)?;
         let (m, v) = file.take_moments(path, net.store(), device)?;
+        let mut ema = Vec::new();
+        for (name, var) in net.param_names().iter().zip(net.vars()) {
+            match file.take(path, &ema_name(name), var.dims(), device) {
+                Ok(t) => ema.push(t),
+                Err(NetsError::MissingWeight { .. }) if config.ema_decay == 0.0 => break,
+                Err(e) => return Err(e),
+            }
+        }
         net.take_weights(path, &mut file)?;
         let mut trainer = Self::new(net, config)?;
         trainer.optimiser.set_moments(m, v, step);
+        if !ema.is_empty() {
+            trainer.ema = Some(ema);
+        }
         Ok(trainer)
     }
 
@@ -275,6 +316,38 @@ impl Trainer {
     /// The network, consuming the trainer.
     pub fn into_net(self) -> FieldNet {
         self.net
+    }
+
+    /// A copy of the network with the moving average of the weights (see
+    /// [`TrainConfig::ema_decay`]), or with the current weights when no average is kept.
+    ///
+    /// # Errors
+    /// Tensor errors from copying the weights.
+    pub fn averaged_net(&self) -> Result<FieldNet> {
+        let net = FieldNet::new_on(self.net.config().clone(), 0, self.net.device())?;
+        let source = match &self.ema {
+            Some(ema) => ema.clone(),
+            None => weights(&self.net)?,
+        };
+        for (var, t) in net.vars().iter().zip(&source) {
+            var.set(t)?;
+        }
+        Ok(net)
+    }
+
+    /// Switches the moving average of the weights on (starting from the current weights, or
+    /// continuing the one kept) with `decay`, or off with 0 (see [`TrainConfig::ema_decay`]).
+    ///
+    /// # Errors
+    /// [`NetsError::InvalidConfig`] for a decay outside `[0, 1)`.
+    pub fn set_ema_decay(&mut self, decay: f64) -> Result<()> {
+        self.update_config(|c| c.ema_decay = decay)?;
+        if decay == 0.0 {
+            self.ema = None;
+        } else if self.ema.is_none() {
+            self.ema = Some(weights(&self.net)?);
+        }
+        Ok(())
     }
 
     /// The training config.
@@ -323,6 +396,12 @@ impl Trainer {
         })
     }
 
+    /// Switches dense queries (see [`TrainConfig::dense`]) on or off, for example to
+    /// fine-tune a resumed run with them.
+    pub fn set_dense(&mut self, dense: bool) {
+        self.config.dense = dense;
+    }
+
     /// Sets the total number of steps (to train a resumed run further).
     pub fn set_steps(&mut self, steps: u64) {
         self.config.steps = steps;
@@ -334,7 +413,11 @@ impl Trainer {
     /// # Errors
     /// I/O errors naming the file.
     pub fn save_checkpoint(&self, path: impl AsRef<Path>) -> Result<()> {
-        let extra = self.optimiser.state_tensors(self.net.param_names());
+        let mut extra = self.optimiser.state_tensors(self.net.param_names());
+        if let Some(ema) = &self.ema {
+            let names = self.net.param_names().iter().map(|n| ema_name(n));
+            extra.extend(names.zip(ema.iter().cloned()));
+        }
         let mut meta = HashMap::new();
         meta.insert(META_STEP.to_string(), self.step().to_string());
         let train = serde_json::to_string(&self.config).map_err(|e| {
@@ -362,9 +445,28 @@ impl Trainer {
         let pred = self.net.forward(batch)?;
         let target = Tensor::from_vec(targets.to_vec(), targets.len(), self.net.device())?;
         let mut loss = (&pred - &target)?.abs()?.mean_all()?;
-        if self.config.grouped() {
-            let groups = Groups::new(batch, targets, self.config.descent_margin as f32)?;
-            if self.config.neighbour_weight > 0.0 {
+        let margin = self.config.descent_margin as f32;
+        let groups = if self.config.dense
+            && (self.config.neighbour_weight > 0.0 || self.config.descent_weight > 0.0)
+        {
+            let encoding = self.net.config().encoding();
+            let (groups, index) = Groups::dense(
+                batch,
+                targets,
+                self.config.descent_rule,
+                margin,
+                self.config.detour_fraction as f32,
+                |t| encoding.decode(t),
+            )?;
+            let index = Tensor::from_vec(index, groups.count * GROUP, pred.device())?;
+            Some((groups, pred.index_select(&index, 0)?))
+        } else if self.config.grouped() {
+            Some((Groups::new(batch, targets, margin)?, pred.clone()))
+        } else {
+            None
+        };
+        if let Some((groups, pred)) = groups {
+            if self.config.neighbour_weight > 0.0 && groups.count > 0 {
                 let slope = groups.slope_loss(&pred)?;
                 loss = (loss + (slope * self.config.neighbour_weight)?)?;
             }
@@ -389,6 +491,12 @@ impl Trainer {
         }
         self.optimiser.lr = self.config.lr_at(self.step());
         self.optimiser.backward_step(self.net.vars(), &loss)?;
+        if let Some(ema) = &mut self.ema {
+            let d = self.config.ema_decay;
+            for (avg, var) in ema.iter_mut().zip(self.net.vars()) {
+                *avg = ((&*avg * d)? + (var.as_tensor().detach() * (1.0 - d))?)?;
+            }
+        }
         Ok(value)
     }
 
@@ -409,9 +517,14 @@ impl Trainer {
                 .wrapping_mul(0x9E37_79B9)
                 .wrapping_add(step),
         );
-        let (b, q) = (self.config.batch_items, self.config.queries_per_item);
         let first = &data.samples[0];
         let (rows, cols) = (first.grid.rows(), first.grid.cols());
+        let b = self.config.batch_items;
+        let q = if self.config.dense {
+            rows * cols
+        } else {
+            self.config.queries_per_item
+        };
         let reads_grid = self.net.config().reads_grid();
         let encoding = self.net.config().encoding();
         let mut batch = Batch {
@@ -432,7 +545,7 @@ impl Trainer {
             }
             batch.goals.extend([s.goal.row as f32, s.goal.col as f32]);
             let pairs = self.config.neighbour_weight > 0.0;
-            let detours = if self.config.detour_fraction > 0.0 {
+            let detours = if self.config.detour_fraction > 0.0 && !self.config.dense {
                 detour_cells(s)
             } else {
                 Vec::new()
@@ -445,7 +558,9 @@ impl Trainer {
                 }
             };
             let mut cells = Vec::with_capacity(q);
-            if self.config.grouped() {
+            if self.config.dense {
+                cells.extend(0..q);
+            } else if self.config.grouped() {
                 // An anchor, then its 8 neighbours in `DIRECTIONS_8` order; the anchor again
                 // where a neighbour is not a move.
                 let rule = self.config.descent_rule;
@@ -520,11 +635,13 @@ impl Trainer {
         let first = self.step();
         let mut recent: Vec<f32> = Vec::new();
         let mut last_validation = None;
+        let mut queries = 0usize;
         while self.step() < self.config.steps {
             let step = self.step();
             let data = &datasets[(step % datasets.len() as u64) as usize];
             let (batch, targets) = self.sample_batch(data, step)?;
             let loss = self.train_batch(&batch, &targets)?;
+            queries += batch.len();
             recent.push(loss);
             if recent.len() > 100 {
                 recent.remove(0);
@@ -573,8 +690,7 @@ impl Trainer {
             seconds,
             steps_per_second: rate,
             items_per_second: rate * self.config.batch_items as f64,
-            queries_per_second: rate
-                * (self.config.batch_items * self.config.queries_per_item) as f64,
+            queries_per_second: queries as f64 / seconds.max(1e-9),
         })
     }
 }
@@ -597,9 +713,13 @@ struct Groups {
     margin: Vec<f32>,
     /// Groups whose anchor is reachable, not the goal, and has a move.
     decisions: usize,
+    /// Total weight of those groups (each group's weight scales its moves in `valid` and
+    /// `other`).
+    decision_weight: f32,
 }
 
 impl Groups {
+    /// The groups of a batch sampled in groups of nine queries.
     fn new(batch: &Batch, targets: &[f32], margin: f32) -> Result<Self> {
         if batch.len() % GROUP != 0 || batch.per_item % GROUP != 0 {
             return Err(NetsError::InvalidInput(format!(
@@ -608,6 +728,107 @@ impl Groups {
             )));
         }
         let count = batch.len() / GROUP;
+        let mut moved = Vec::with_capacity(count * (GROUP - 1));
+        let mut at_goal = Vec::with_capacity(count);
+        for g in 0..count {
+            let q = &batch.queries[2 * g * GROUP..][..2 * GROUP];
+            let item = g * GROUP / batch.per_item;
+            at_goal.push(q[..2] == batch.goals[2 * item..][..2]);
+            moved.extend((1..GROUP).map(|j| q[2 * j..][..2] != q[..2]));
+        }
+        let weight = vec![1.0; count];
+        Ok(Self::from_parts(targets, &moved, &at_goal, &weight, margin))
+    }
+
+    /// The groups of a dense batch (every cell of each item, row-major): one per reachable
+    /// cell, with the indices into the batch's outputs that lay them out as groups of nine
+    /// (a neighbour that is not a move under `rule` is the anchor again). Reachability comes
+    /// from the targets (negative = blocked), which is all `rule` needs: a free cell next to a
+    /// reachable one is reachable.
+    ///
+    /// With `detour_share` > 0, the groups of each item's detour cells (see
+    /// [`TrainConfig::detour_fraction`]; `distance` decodes a target into cells) carry that
+    /// share of the item's weight, the rest the other cells.
+    fn dense(
+        batch: &Batch,
+        targets: &[f32],
+        rule: MoveRule,
+        margin: f32,
+        detour_share: f32,
+        distance: impl Fn(f32) -> f32,
+    ) -> Result<(Self, Vec<u32>)> {
+        let (rows, cols) = match batch.extent[..] {
+            [rows, cols] if rows * cols == batch.per_item => (rows, cols),
+            _ => {
+                return Err(NetsError::InvalidInput(format!(
+                    "dense training needs every cell of a 2D grid per item ({:?} cells, {} \
+                     queries per item)",
+                    batch.extent, batch.per_item
+                )))
+            }
+        };
+        let cells = rows * cols;
+        let mut index = Vec::new();
+        let mut grouped = Vec::new();
+        let mut moved = Vec::new();
+        let mut at_goal = Vec::new();
+        let mut weight = Vec::new();
+        for (item, t) in targets.chunks_exact(cells).enumerate() {
+            let blocked = t.iter().map(|&v| v < 0.0).collect();
+            let grid = Grid2::from_obstacles(rows, cols, blocked)?;
+            let goal = &batch.goals[2 * item..][..2];
+            let base = item * cells;
+            let detour = |i: usize| {
+                let dr = (i / cols) as f32 - goal[0];
+                let dc = (i % cols) as f32 - goal[1];
+                let (dr, dc) = (dr.abs(), dc.abs());
+                let octile = dr.max(dc) + (std::f32::consts::SQRT_2 - 1.0) * dr.min(dc);
+                t[i] >= 0.0 && distance(t[i]) > octile + 0.5
+            };
+            let detours = (0..cells).filter(|&i| detour(i)).count();
+            let plain = (0..cells).filter(|&i| t[i] >= 0.0).count() - detours;
+            let (w_detour, w_plain) = if detour_share > 0.0 && detours > 0 && plain > 0 {
+                let total = (detours + plain) as f32;
+                (
+                    detour_share * total / detours as f32,
+                    (1.0 - detour_share) * total / plain as f32,
+                )
+            } else {
+                (1.0, 1.0)
+            };
+            for i in (0..cells).filter(|&i| t[i] >= 0.0) {
+                let from = Cell2::new(i / cols, i % cols);
+                at_goal.push(goal == [from.row as f32, from.col as f32]);
+                weight.push(if detour(i) { w_detour } else { w_plain });
+                index.push((base + i) as u32);
+                grouped.push(t[i]);
+                for &(dr, dc) in &DIRECTIONS_8 {
+                    let allowed = rule.allows(&grid, from, dr, dc);
+                    let j = if allowed {
+                        (i as isize + dr * cols as isize + dc) as usize
+                    } else {
+                        i
+                    };
+                    index.push((base + j) as u32);
+                    grouped.push(t[j]);
+                    moved.push(allowed);
+                }
+            }
+        }
+        let groups = Self::from_parts(&grouped, &moved, &at_goal, &weight, margin);
+        Ok((groups, index))
+    }
+
+    /// Groups from their targets (nine per group: anchor first), whether each neighbour is a
+    /// move (eight per group), whether each anchor is the goal, and each group's weight.
+    fn from_parts(
+        targets: &[f32],
+        moved: &[bool],
+        at_goal: &[bool],
+        weight: &[f32],
+        margin: f32,
+    ) -> Self {
+        let count = at_goal.len();
         let n = GROUP - 1;
         let zeros = || vec![0f32; count * n];
         let mut groups = Self {
@@ -618,18 +839,15 @@ impl Groups {
             other: zeros(),
             margin: zeros(),
             decisions: 0,
+            decision_weight: 0.0,
         };
         for g in 0..count {
             let t = &targets[g * GROUP..][..GROUP];
-            let q = &batch.queries[2 * g * GROUP..][..2 * GROUP];
-            let item = g * GROUP / batch.per_item;
-            let at_goal = q[..2] == batch.goals[2 * item..][..2];
             let row = g * n..(g + 1) * n;
             let valid = &mut groups.valid[row.clone()];
             for j in 0..n {
-                let moved = q[2 * j + 2..][..2] != q[..2];
-                if t[0] >= 0.0 && t[j + 1] >= 0.0 && moved {
-                    valid[j] = 1.0;
+                if t[0] >= 0.0 && t[j + 1] >= 0.0 && moved[g * n + j] {
+                    valid[j] = weight[g];
                     groups.rise[g * n + j] = t[j + 1] - t[0];
                 }
             }
@@ -637,7 +855,7 @@ impl Groups {
                 .filter(|&j| valid[j] > 0.0)
                 .map(|j| t[j + 1])
                 .fold(f32::NEG_INFINITY, f32::max);
-            if best == f32::NEG_INFINITY || at_goal {
+            if best == f32::NEG_INFINITY || at_goal[g] {
                 continue;
             }
             for j in (0..n).filter(|&j| valid[j] > 0.0) {
@@ -646,13 +864,14 @@ impl Groups {
                 if gap <= 1e-6 {
                     groups.winner[g * n + j] = 1.0;
                 } else {
-                    groups.other[g * n + j] = 1.0;
+                    groups.other[g * n + j] = weight[g];
                     groups.margin[g * n + j] = gap.min(margin);
                 }
             }
             groups.decisions += 1;
+            groups.decision_weight += weight[g];
         }
-        Ok(groups)
+        groups
     }
 
     /// (groups, 8) values as a tensor on `device`.
@@ -692,14 +911,15 @@ impl Groups {
         let hinge = (self.tensor(&self.margin, device)? - gap)?.relu()?;
         let others = self.tensor(&self.other, device)?;
         Ok(Some(
-            ((hinge * others)?.sum_all()? / self.decisions as f64)?,
+            ((hinge * others)?.sum_all()? / self.decision_weight as f64)?,
         ))
     }
 }
 
 /// The neighbour-difference loss on outputs `pred` laid out in groups of `size` (an anchor,
 /// then `size - 1` others): the L1 error of each other output's rise above its anchor against
-/// the true `rise`, averaged over the pairs `valid` marks with 1. `rise` and `valid` hold
+/// the true `rise`, averaged over the pairs with the weights in `valid` (0 leaves a pair out;
+/// 1 for a plain mean). `rise` and `valid` hold
 /// (groups, size - 1) values.
 fn rise_loss(pred: &Tensor, size: usize, rise: Vec<f32>, valid: Vec<f32>) -> Result<Tensor> {
     let groups = pred.elem_count() / size;
@@ -728,6 +948,16 @@ fn detour_cells(s: &Sample) -> Vec<usize> {
             (d.is_finite() && d > octile + 0.5).then_some(i)
         })
         .collect()
+}
+
+/// Copies of the network's weights in storage of their own (a detached tensor would share the
+/// variable's storage, which each optimiser step overwrites).
+fn weights(net: &FieldNet) -> Result<Vec<Tensor>> {
+    Ok(net
+        .vars()
+        .iter()
+        .map(|v| v.as_tensor().detach().copy())
+        .collect::<candle_core::Result<_>>()?)
 }
 
 /// Dataset targets are in the paper's encoding; the network may use another.
@@ -856,5 +1086,114 @@ mod tests {
         // Its rise above the anchor is off by the same change, over 6 moves.
         let change = wrong[1] - targets[1];
         assert!((slope - change / 6.0).abs() < 1e-6, "{slope}");
+    }
+
+    /// A dense 3x3 batch: walls at (0,1) and (1,1), goal (0,2), exact `vin`-rule distances
+    /// under `1 - d/100`. Cells (0,0), (1,0) and (2,0) are detour cells.
+    fn dense_room() -> (Batch, Vec<f32>) {
+        let s2 = std::f32::consts::SQRT_2;
+        let d = [
+            2.0 + 2.0 * s2,
+            f32::INFINITY,
+            0.0,
+            1.0 + 2.0 * s2,
+            f32::INFINITY,
+            1.0,
+            2.0 + s2,
+            1.0 + s2,
+            2.0,
+        ];
+        let targets = d
+            .iter()
+            .map(|&d| TargetEncoding::Linear { scale: 100.0 }.encode(d));
+        let queries = (0..9)
+            .flat_map(|i| [(i / 3) as f32, (i % 3) as f32])
+            .collect();
+        let batch = Batch {
+            extent: vec![3, 3],
+            items: 1,
+            obstacles: Vec::new(),
+            goals: vec![0.0, 2.0],
+            per_item: 9,
+            queries,
+        };
+        (batch, targets.collect())
+    }
+
+    #[test]
+    fn dense_groups_gather_every_reachable_cell_with_its_moves() {
+        let (batch, targets) = dense_room();
+        let decode = |t: f32| TargetEncoding::Linear { scale: 100.0 }.decode(t);
+        let (g, index) =
+            Groups::dense(&batch, &targets, MoveRule::Vin, 0.005, 0.0, decode).unwrap();
+        // Seven reachable cells, six decisions (none on the goal).
+        assert_eq!((g.count, g.decisions), (7, 6));
+        // The group of (2,1), the sixth reachable cell: up and down-left/right are not moves
+        // (the anchor again); up-left (1,0) and up-right (1,2) are, under the vin rule.
+        assert_eq!(index[5 * GROUP..6 * GROUP], [7, 7, 7, 6, 8, 3, 5, 7, 7]);
+        let (_, strict) =
+            Groups::dense(&batch, &targets, MoveRule::Strict, 0.005, 0.0, decode).unwrap();
+        assert_eq!(strict[5 * GROUP..6 * GROUP], [7, 7, 7, 6, 8, 7, 7, 7, 7]);
+        // The exact field scores zero; gathered outputs are read through `index`.
+        let pred = Tensor::from_vec(targets.clone(), 9, &Device::Cpu).unwrap();
+        let idx = Tensor::from_vec(index, g.count * GROUP, &Device::Cpu).unwrap();
+        let gathered = pred.index_select(&idx, 0).unwrap();
+        let descent = g.descent_loss(&gathered).unwrap().unwrap();
+        assert_eq!(descent.to_scalar::<f32>().unwrap(), 0.0);
+        assert_eq!(
+            g.slope_loss(&gathered).unwrap().to_scalar::<f32>().unwrap(),
+            0.0
+        );
+        // Detour share 0.5: the three detour cells weigh 7/6 each, the four others 7/8.
+        let (w, _) = Groups::dense(&batch, &targets, MoveRule::Vin, 0.005, 0.5, decode).unwrap();
+        let expected = 3.0 * 7.0 / 6.0 + 3.0 * 7.0 / 8.0;
+        assert!(
+            (w.decision_weight - expected).abs() < 1e-5,
+            "{}",
+            w.decision_weight
+        );
+    }
+
+    #[test]
+    fn the_weight_average_resumes_and_loads_from_a_checkpoint() {
+        use crate::model::{ContextConfig, ModelConfig};
+        let dir = std::env::temp_dir().join(format!("envfield-ema-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let (batch, targets) = dense_room();
+        let mut obstacles = vec![0.0; 9];
+        (obstacles[1], obstacles[4]) = (1.0, 1.0);
+        let batch = Batch { obstacles, ..batch };
+        let model = ModelConfig::Context(ContextConfig::default());
+        let config = TrainConfig {
+            lr: 1e-2,
+            ema_decay: 0.5,
+            dense: true,
+            descent_weight: 1.0,
+            ..TrainConfig::default()
+        };
+        let mut a = Trainer::new(FieldNet::new(model, 3).unwrap(), config).unwrap();
+        let raw = |t: &Trainer| t.net().forward(&batch).unwrap().to_vec1::<f32>().unwrap();
+        let averaged = |t: &Trainer| {
+            let net = t.averaged_net().unwrap();
+            net.forward(&batch).unwrap().to_vec1::<f32>().unwrap()
+        };
+        for _ in 0..3 {
+            a.train_batch(&batch, &targets).unwrap();
+        }
+        assert_ne!(raw(&a), averaged(&a), "the average lags the weights");
+        let path = dir.join("ema.ckpt");
+        a.save_checkpoint(&path).unwrap();
+        // Loading a checkpoint as a network gives the average.
+        let loaded = FieldNet::load(&path).unwrap();
+        assert_eq!(
+            loaded.forward(&batch).unwrap().to_vec1::<f32>().unwrap(),
+            averaged(&a)
+        );
+        // A resumed run continues the same average.
+        let mut b = Trainer::resume(&path).unwrap();
+        a.train_batch(&batch, &targets).unwrap();
+        b.train_batch(&batch, &targets).unwrap();
+        assert_eq!(averaged(&a), averaged(&b));
+        std::fs::remove_dir_all(&dir).ok();
     }
 }
