@@ -19,7 +19,7 @@ use envfield::grid::{
 };
 use envfield::mazes::{GeneratorKind, MazeGenerator};
 use envfield::nets::{FieldNet, Vin};
-use envfield::plan::{evaluate, AStar, EvalConfig, FieldDescent, Planner, Report};
+use envfield::plan::{evaluate, AStar, DecisionProfile, EvalConfig, FieldDescent, Planner, Report};
 use std::path::{Path, PathBuf};
 
 #[global_allocator]
@@ -85,6 +85,11 @@ struct Args {
     /// Print one JSON summary line per planner (the last line is the last planner's).
     #[arg(long)]
     json: bool,
+    /// For planners with a field (field, hyper, fmm, graph): descent from every reachable
+    /// cell of each evaluated (maze, goal), by true distance to the goal in bands of 5
+    /// cells: how often its move is not a shortest move and how often it fails.
+    #[arg(long)]
+    profile: bool,
     /// Write every planned path to this JSON file.
     #[arg(long)]
     paths: Option<PathBuf>,
@@ -214,6 +219,32 @@ fn draw(
     Ok(())
 }
 
+/// Prints a decision profile as a table, or as one JSON line.
+fn print_profile(label: &str, planner: &str, p: &DecisionProfile, json: bool) -> Result<()> {
+    if json {
+        let line = serde_json::json!({"mazes": label, "planner": planner, "profile": p});
+        println!("{line}");
+        return Ok(());
+    }
+    let pct = |n: usize, of: usize| 100.0 * n as f64 / of.max(1) as f64;
+    println!("{label}, {planner}: descent from every reachable cell, by distance to the goal");
+    println!(
+        "{:>9} {:>8} {:>9} {:>10}",
+        "distance", "cells", "wrong %", "failing %"
+    );
+    let rows = p.bands.iter().enumerate().filter(|(_, b)| b.cells > 0);
+    for (k, b) in rows {
+        let (lo, hi) = (k as f32 * p.width, (k + 1) as f32 * p.width);
+        let band = format!("{lo}-{hi}");
+        let (w, f) = (pct(b.wrong, b.cells), pct(b.failing, b.cells));
+        println!("{band:>9} {:>8} {w:>9.2} {f:>10.2}", b.cells);
+    }
+    let t = p.total();
+    let (w, f) = (pct(t.wrong, t.cells), pct(t.failing, t.cells));
+    println!("{:>9} {:>8} {w:>9.2} {f:>10.2}", "all", t.cells);
+    Ok(())
+}
+
 fn main() -> Result<()> {
     let args = Args::parse();
     let rule: MoveRule = args.rule.parse()?;
@@ -292,6 +323,14 @@ fn main() -> Result<()> {
                 }
             }
             let s = &report.summary;
+            if let (true, Some(model)) = (args.profile, choice.field_model()) {
+                let mut profile = DecisionProfile::new(5.0)?;
+                for r in &report.results {
+                    let grid = &suite.mazes[r.maze].grid;
+                    profile.add(grid, rule, r.goal, &model.predict(grid, r.goal)?)?;
+                }
+                print_profile(&suite.label, &s.planner, &profile, args.json)?;
+            }
             lines.push((suite.label.clone(), s.clone()));
             if args.json {
                 println!("{}", serde_json::to_string(s)?);

@@ -31,6 +31,7 @@ mod error;
 mod gradient;
 mod harness;
 mod planner;
+mod profile;
 
 pub use astar::AStar;
 pub use descent::{descend, FieldDescent};
@@ -40,3 +41,4 @@ pub use harness::{
     evaluate, evaluate_pairs, is_legal_walk, EvalConfig, PairResult, Report, Summary,
 };
 pub use planner::{path_length, PlanOutcome, Planner};
+pub use profile::{Band, DecisionProfile};
