@@ -79,10 +79,11 @@ pub struct TrainConfig {
     /// Dense queries: every cell of each sampled maze is a query (`queries_per_item` is then
     /// unused), and the neighbour-difference and descent losses run over every reachable cell
     /// with its 8 neighbours, gathered from the one field prediction; `detour_fraction` is
-    /// then the share of each maze's weight in those losses that its detour cells carry. One whole field gives a decision per reachable cell, where groups of nine
-    /// queries give one per group: on a 28x28 maze about 500 decisions for 784 queries
-    /// against 42 for 378. Needs nothing of the network (the reachable cells come from the
-    /// targets).
+    /// then the share of each maze's weight in those losses that its detour cells carry. One
+    /// whole field gives a decision per reachable cell, where groups of nine queries give one
+    /// per group: on a 28x28 maze about 500 decisions for 784 queries against 42 for 378.
+    /// Needs nothing of the network (the reachable cells come from the targets). In this
+    /// project's runs it trained worse decisions than the sampled groups (models/README.md).
     #[serde(default)]
     pub dense: bool,
     /// Decay of an exponential moving average of the weights, updated after every step
