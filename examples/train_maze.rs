@@ -107,8 +107,8 @@ struct Args {
     #[arg(long, default_value_t = 0.005)]
     descent_margin: f64,
     /// Dense queries: every cell of each maze, and the neighbour-difference and descent losses
-    /// over every reachable cell (--queries and --detour-fraction are then unused). Also
-    /// switches a resumed run to dense queries.
+    /// over every reachable cell (--queries is then unused, and --detour-fraction is the share
+    /// of those losses' weight on detour cells). Also switches a resumed run to dense queries.
     #[arg(long)]
     dense: bool,
     /// Keep a moving average of the weights with this decay (0.999: about the last 1000
