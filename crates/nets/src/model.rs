@@ -5,7 +5,7 @@ use crate::layers::{
     Mlp, MlpConfig,
 };
 use crate::params::{
-    ema_name, to_safetensors, Init, ParamStore, TensorFile, FORMAT, META_CONFIG, META_FORMAT,
+    to_safetensors, Init, ParamStore, TensorFile, FORMAT, META_CONFIG, META_FORMAT,
     OPTIMISER_PREFIX,
 };
 use crate::{NetsError, Result};
@@ -1090,23 +1090,7 @@ impl FieldNet {
         let mut file = TensorFile::read(path)?;
         let config = read_config(path, &file)?;
         let mut net = Self::new_on(config, 0, device)?;
-        let names = net.store.names().to_vec();
-        let average = if names
-            .iter()
-            .all(|n| file.tensors.contains_key(&ema_name(n)))
-        {
-            let vars = net.store.vars();
-            let take = |(n, v): (&String, &Var)| file.take(path, &ema_name(n), v.dims(), device);
-            Some(
-                names
-                    .iter()
-                    .zip(vars)
-                    .map(take)
-                    .collect::<Result<Vec<_>>>()?,
-            )
-        } else {
-            None
-        };
+        let average = file.take_average(path, &net.store, device, false)?;
         net.take_weights(path, &mut file)?;
         for (var, t) in net.store.vars().iter().zip(average.into_iter().flatten()) {
             var.set(&t)?;

@@ -264,6 +264,33 @@ impl TensorFile {
         Ok((m, v))
     }
 
+    /// Takes the moving average of the weights of `store` (as written by the trainer under
+    /// [`ema_name`]), checking shapes. `None` when the file keeps no average, unless
+    /// `required`: then a missing tensor is an error.
+    pub(crate) fn take_average(
+        &mut self,
+        path: &Path,
+        store: &ParamStore,
+        device: &Device,
+        required: bool,
+    ) -> Result<Option<Vec<Tensor>>> {
+        let names = store.names();
+        if !required
+            && !names
+                .iter()
+                .all(|n| self.tensors.contains_key(&ema_name(n)))
+        {
+            return Ok(None);
+        }
+        let take = |(n, v): (&String, &Var)| self.take(path, &ema_name(n), v.dims(), device);
+        let average: Vec<Tensor> = names
+            .iter()
+            .zip(store.vars())
+            .map(take)
+            .collect::<Result<_>>()?;
+        Ok(Some(average))
+    }
+
     /// Takes tensor `name`, checking its shape.
     pub(crate) fn take(
         &mut self,

@@ -287,20 +287,11 @@ impl Trainer {
         let model = read_config(path, &file)?;
         let mut net = FieldNet::new_on(model, 0, device)?;
         let (m, v) = file.take_moments(path, net.store(), device)?;
-        let mut ema = Vec::new();
-        for (name, var) in net.param_names().iter().zip(net.vars()) {
-            match file.take(path, &ema_name(name), var.dims(), device) {
-                Ok(t) => ema.push(t),
-                Err(NetsError::MissingWeight { .. }) if config.ema_decay == 0.0 => break,
-                Err(e) => return Err(e),
-            }
-        }
+        let ema = file.take_average(path, net.store(), device, config.ema_decay > 0.0)?;
         net.take_weights(path, &mut file)?;
         let mut trainer = Self::new(net, config)?;
         trainer.optimiser.set_moments(m, v, step);
-        if !ema.is_empty() {
-            trainer.ema = Some(ema);
-        }
+        trainer.ema = ema;
         Ok(trainer)
     }
 
@@ -779,14 +770,14 @@ impl Groups {
             let grid = Grid2::from_obstacles(rows, cols, blocked)?;
             let goal = &batch.goals[2 * item..][..2];
             let base = item * cells;
-            let detour = |i: usize| {
-                let dr = (i / cols) as f32 - goal[0];
-                let dc = (i % cols) as f32 - goal[1];
-                let (dr, dc) = (dr.abs(), dc.abs());
-                let octile = dr.max(dc) + (std::f32::consts::SQRT_2 - 1.0) * dr.min(dc);
-                t[i] >= 0.0 && distance(t[i]) > octile + 0.5
-            };
-            let detours = (0..cells).filter(|&i| detour(i)).count();
+            let detour: Vec<bool> = (0..cells)
+                .map(|i| {
+                    let dr = ((i / cols) as f32 - goal[0]).abs();
+                    let dc = ((i % cols) as f32 - goal[1]).abs();
+                    t[i] >= 0.0 && is_detour(distance(t[i]), dr, dc)
+                })
+                .collect();
+            let detours = detour.iter().filter(|&&d| d).count();
             let plain = (0..cells).filter(|&i| t[i] >= 0.0).count() - detours;
             let (w_detour, w_plain) = if detour_share > 0.0 && detours > 0 && plain > 0 {
                 let total = (detours + plain) as f32;
@@ -800,7 +791,7 @@ impl Groups {
             for i in (0..cells).filter(|&i| t[i] >= 0.0) {
                 let from = Cell2::new(i / cols, i % cols);
                 at_goal.push(goal == [from.row as f32, from.col as f32]);
-                weight.push(if detour(i) { w_detour } else { w_plain });
+                weight.push(if detour[i] { w_detour } else { w_plain });
                 index.push((base + i) as u32);
                 grouped.push(t[i]);
                 for &(dr, dc) in &DIRECTIONS_8 {
@@ -945,10 +936,17 @@ fn detour_cells(s: &Sample) -> Vec<usize> {
             let d = envfield_mazes::decode_target(t);
             let dr = (i / cols).abs_diff(s.goal.row) as f32;
             let dc = (i % cols).abs_diff(s.goal.col) as f32;
-            let octile = dr.max(dc) + (std::f32::consts::SQRT_2 - 1.0) * dr.min(dc);
-            (d.is_finite() && d > octile + 0.5).then_some(i)
+            is_detour(d, dr, dc).then_some(i)
         })
         .collect()
+}
+
+/// Whether a cell at true distance `distance` (infinite: unreachable) and `(dr, dc)` cells
+/// from the goal is a detour cell: its distance exceeds the octile distance by more than half
+/// a cell.
+fn is_detour(distance: f32, dr: f32, dc: f32) -> bool {
+    let octile = dr.max(dc) + (std::f32::consts::SQRT_2 - 1.0) * dr.min(dc);
+    distance.is_finite() && distance > octile + 0.5
 }
 
 /// Copies of the network's weights in storage of their own (a detached tensor would share the
