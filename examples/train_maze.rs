@@ -81,6 +81,10 @@ struct Args {
     /// library's 11-layer dilated encoder).
     #[arg(long)]
     encoder: Option<String>,
+    /// Residual context encoder: each convolution that keeps the channel count adds its input
+    /// (`relu(x + conv(x))`), for encoders deeper than the default.
+    #[arg(long)]
+    residual: bool,
     /// Add value-iteration layers with this many Q channels to the context encoder (0: none).
     #[arg(long, default_value_t = 0)]
     propagation: usize,
@@ -250,6 +254,7 @@ fn main() -> Result<()> {
                 "context" => {
                     let mut c = ContextConfig {
                         encoding,
+                        residual: args.residual,
                         ..ContextConfig::default()
                     };
                     if let Some(spec) = &args.encoder {

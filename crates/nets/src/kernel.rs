@@ -36,14 +36,16 @@ impl ConvShape {
     }
 }
 
-/// `out = relu(conv(input) + bias)` for one image. `weight` is the (9 * C, Co) matrix of the
-/// tracked convolution, row `tap * C + ci` with taps in row-major order; `out` holds
-/// Ho * Wo * Co values.
+/// `out = relu(conv(input) + bias)` for one image, or with `residual`
+/// `relu(input + conv(input) + bias)` (a residual layer: stride 1 and as many output channels
+/// as input channels). `weight` is the (9 * C, Co) matrix of the tracked convolution, row
+/// `tap * C + ci` with taps in row-major order; `out` holds Ho * Wo * Co values.
 pub(crate) fn conv3x3_relu(
     shape: ConvShape,
     input: &[f32],
     weight: &[f32],
     bias: &[f32],
+    residual: bool,
     out: &mut [f32],
 ) {
     let (ho, wo) = shape.out_hw();
@@ -51,66 +53,69 @@ pub(crate) fn conv3x3_relu(
     assert_eq!(weight.len(), 9 * shape.c * shape.co, "weight size");
     assert_eq!(bias.len(), shape.co, "bias size");
     assert_eq!(out.len(), ho * wo * shape.co, "output size");
+    assert!(
+        !residual || (shape.stride == 1 && shape.c == shape.co),
+        "a residual layer keeps its shape"
+    );
+    let args = Args {
+        shape,
+        input,
+        weight,
+        bias,
+        residual,
+    };
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx512f") {
         // SAFETY: the only requirement of `conv_avx512` is a CPU with AVX-512F, checked above.
-        unsafe { conv_avx512(shape, input, weight, bias, out) };
+        unsafe { conv_avx512(args, out) };
         return;
     }
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
         // SAFETY: the only requirement of `conv_avx2` is a CPU with AVX2 and FMA, checked above.
-        unsafe { conv_avx2(shape, input, weight, bias, out) };
+        unsafe { conv_avx2(args, out) };
         return;
     }
-    conv_blocks::<false, false>(shape, input, weight, bias, out);
+    conv_blocks::<false, false>(args, out);
+}
+
+/// The read-only inputs of one convolution.
+#[derive(Clone, Copy)]
+struct Args<'a> {
+    shape: ConvShape,
+    input: &'a [f32],
+    weight: &'a [f32],
+    bias: &'a [f32],
+    residual: bool,
 }
 
 /// # Safety
 /// The CPU must have AVX2 and FMA.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-unsafe fn conv_avx2(
-    shape: ConvShape,
-    input: &[f32],
-    weight: &[f32],
-    bias: &[f32],
-    out: &mut [f32],
-) {
-    conv_blocks::<true, false>(shape, input, weight, bias, out);
+unsafe fn conv_avx2(args: Args, out: &mut [f32]) {
+    conv_blocks::<true, false>(args, out);
 }
 
 /// # Safety
 /// The CPU must have AVX-512F (and with it AVX2 and FMA).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx2,fma")]
-unsafe fn conv_avx512(
-    shape: ConvShape,
-    input: &[f32],
-    weight: &[f32],
-    bias: &[f32],
-    out: &mut [f32],
-) {
-    conv_blocks::<true, true>(shape, input, weight, bias, out);
+unsafe fn conv_avx512(args: Args, out: &mut [f32]) {
+    conv_blocks::<true, true>(args, out);
 }
 
 /// Splits the output channels into blocks of the widest width among 32, 16, 8, 4 and 1 that
 /// divides Co, so each block's accumulators are a fixed-size array the compiler keeps in
 /// vector registers.
 #[inline(always)]
-fn conv_blocks<const FMA: bool, const SPLIT: bool>(
-    shape: ConvShape,
-    input: &[f32],
-    weight: &[f32],
-    bias: &[f32],
-    out: &mut [f32],
-) {
-    match shape.co {
-        co if co % 32 == 0 => conv_block::<32, FMA, SPLIT>(shape, input, weight, bias, out),
-        co if co % 16 == 0 => conv_block::<16, FMA, SPLIT>(shape, input, weight, bias, out),
-        co if co % 8 == 0 => conv_block::<8, FMA, SPLIT>(shape, input, weight, bias, out),
-        co if co % 4 == 0 => conv_block::<4, FMA, SPLIT>(shape, input, weight, bias, out),
-        _ => conv_block::<1, FMA, SPLIT>(shape, input, weight, bias, out),
+fn conv_blocks<const FMA: bool, const SPLIT: bool>(args: Args, out: &mut [f32]) {
+    match args.shape.co {
+        co if co % 32 == 0 => conv_block::<32, FMA, SPLIT>(args, out),
+        co if co % 16 == 0 => conv_block::<16, FMA, SPLIT>(args, out),
+        co if co % 8 == 0 => conv_block::<8, FMA, SPLIT>(args, out),
+        co if co % 4 == 0 => conv_block::<4, FMA, SPLIT>(args, out),
+        _ => conv_block::<1, FMA, SPLIT>(args, out),
     }
 }
 
@@ -133,13 +138,14 @@ fn axis_taps(n_out: usize, n_in: usize, dilation: usize, stride: usize) -> Vec<[
 /// latency of the previous multiply-add). A tap inside the map for only one pixel of the pair
 /// (at the borders) runs for that pixel alone.
 #[inline(always)]
-fn conv_block<const B: usize, const FMA: bool, const SPLIT: bool>(
-    shape: ConvShape,
-    input: &[f32],
-    weight: &[f32],
-    bias: &[f32],
-    out: &mut [f32],
-) {
+fn conv_block<const B: usize, const FMA: bool, const SPLIT: bool>(args: Args, out: &mut [f32]) {
+    let Args {
+        shape,
+        input,
+        weight,
+        bias,
+        residual,
+    } = args;
     let ConvShape { w, c, co, .. } = shape;
     let (ho, wo) = shape.out_hw();
     let taps_y = axis_taps(ho, shape.h, shape.dilation, shape.stride);
@@ -180,14 +186,23 @@ fn conv_block<const B: usize, const FMA: bool, const SPLIT: bool>(
                         }
                     }
                 }
-                let store = |dst: &mut [f32], acc: [f32; B], odd: [f32; B]| {
-                    for ((o, v), u) in dst[block * B..][..B].iter_mut().zip(acc).zip(odd) {
-                        *o = (v + u).max(0.0);
+                let store = |dst: &mut [f32], x: usize, acc: [f32; B], odd: [f32; B]| {
+                    let dst = &mut dst[x * co + block * B..][..B];
+                    if residual {
+                        // Stride 1 and C == Co: the output pixel's input is the same pixel.
+                        let skip = &pixel(oy, x)[block * B..][..B];
+                        for (((o, v), u), s) in dst.iter_mut().zip(acc).zip(odd).zip(skip) {
+                            *o = (v + u + s).max(0.0);
+                        }
+                    } else {
+                        for ((o, v), u) in dst.iter_mut().zip(acc).zip(odd) {
+                            *o = (v + u).max(0.0);
+                        }
                     }
                 };
-                store(&mut out_row[ox * co..][..co], acc0, odd0);
+                store(out_row, ox, acc0, odd0);
                 if pair {
-                    store(&mut out_row[(ox + 1) * co..][..co], acc1, odd1);
+                    store(out_row, ox + 1, acc1, odd1);
                 }
             }
         }
@@ -245,8 +260,15 @@ fn madd_row<const B: usize, const FMA: bool>(acc: &mut [f32; B], src: &[f32], ro
 mod tests {
     use super::*;
 
-    /// The convolution written out from its definition.
-    fn reference(shape: ConvShape, input: &[f32], weight: &[f32], bias: &[f32]) -> Vec<f32> {
+    /// The convolution written out from its definition (`residual`: plus the input pixel).
+    fn reference(args: Args) -> Vec<f32> {
+        let Args {
+            shape,
+            input,
+            weight,
+            bias,
+            residual,
+        } = args;
         let (ho, wo) = shape.out_hw();
         let (c, co, d) = (shape.c, shape.co, shape.dilation as isize);
         let mut out = vec![0.0; ho * wo * co];
@@ -265,6 +287,9 @@ mod tests {
                             v += x as f64 * weight[(t * c + ci) * co + o] as f64;
                         }
                     }
+                    if residual {
+                        v += input[(oy * shape.w + ox) * c + o] as f64;
+                    }
                     out[(oy * wo + ox) * co + o] = v.max(0.0) as f32;
                 }
             }
@@ -282,15 +307,19 @@ mod tests {
             ((seed >> 40) as f32 / (1u64 << 24) as f32) - 0.5
         };
         // Odd and even widths (the last pixel of an odd row has no partner), every block width,
-        // a dilation wider than the map, stride 2, and a single pixel.
-        for (h, w, c, co, dilation, stride) in [
-            (7, 5, 3, 32, 1, 1),
-            (9, 9, 16, 16, 2, 1),
-            (6, 11, 4, 8, 4, 2),
-            (28, 28, 5, 12, 16, 1),
-            (5, 4, 2, 3, 1, 2),
-            (4, 6, 3, 64, 8, 1),
-            (1, 1, 1, 1, 1, 1),
+        // a dilation wider than the map, stride 2, and a single pixel; residual layers where
+        // the shape allows.
+        for (h, w, c, co, dilation, stride, residual) in [
+            (7, 5, 3, 32, 1, 1, false),
+            (9, 9, 16, 16, 2, 1, false),
+            (9, 9, 16, 16, 2, 1, true),
+            (6, 11, 4, 8, 4, 2, false),
+            (28, 28, 5, 12, 16, 1, false),
+            (28, 27, 32, 32, 8, 1, true),
+            (5, 4, 2, 3, 1, 2, false),
+            (4, 6, 3, 64, 8, 1, false),
+            (1, 1, 1, 1, 1, 1, false),
+            (1, 1, 1, 1, 1, 1, true),
         ] {
             let shape = ConvShape {
                 h,
@@ -304,7 +333,14 @@ mod tests {
             let weight: Vec<f32> = (0..9 * c * co).map(|_| next()).collect();
             let bias: Vec<f32> = (0..co).map(|_| next() * 0.1).collect();
             let (ho, wo) = shape.out_hw();
-            let want = reference(shape, &input, &weight, &bias);
+            let args = Args {
+                shape,
+                input: &input,
+                weight: &weight,
+                bias: &bias,
+                residual,
+            };
+            let want = reference(args);
             // Every code path this CPU can run, and the one picked at run time.
             let mut paths: Vec<(&str, Vec<f32>)> = Vec::new();
             let mut run = |name, f: &dyn Fn(&mut [f32])| {
@@ -313,29 +349,21 @@ mod tests {
                 paths.push((name, out));
             };
             run("dispatched", &|o| {
-                conv3x3_relu(shape, &input, &weight, &bias, o)
+                conv3x3_relu(shape, &input, &weight, &bias, residual, o)
             });
-            run("portable", &|o| {
-                conv_blocks::<false, false>(shape, &input, &weight, &bias, o)
-            });
-            run("portable split", &|o| {
-                conv_blocks::<false, true>(shape, &input, &weight, &bias, o)
-            });
+            run("portable", &|o| conv_blocks::<false, false>(args, o));
+            run("portable split", &|o| conv_blocks::<false, true>(args, o));
             #[cfg(target_arch = "x86_64")]
             if std::arch::is_x86_feature_detected!("avx2")
                 && std::arch::is_x86_feature_detected!("fma")
             {
                 // SAFETY: the CPU has AVX2 and FMA.
-                run("avx2", &|o| unsafe {
-                    conv_avx2(shape, &input, &weight, &bias, o)
-                });
+                run("avx2", &|o| unsafe { conv_avx2(args, o) });
             }
             #[cfg(target_arch = "x86_64")]
             if std::arch::is_x86_feature_detected!("avx512f") {
                 // SAFETY: the CPU has AVX-512F.
-                run("avx512", &|o| unsafe {
-                    conv_avx512(shape, &input, &weight, &bias, o)
-                });
+                run("avx512", &|o| unsafe { conv_avx512(args, o) });
             }
             for (path, got) in &paths {
                 for (i, (a, b)) in got.iter().zip(&want).enumerate() {

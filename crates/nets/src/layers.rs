@@ -257,17 +257,6 @@ pub(crate) struct Conv {
 }
 
 impl Conv {
-    /// Kaiming-normal initialisation (for a ReLU after it).
-    pub(crate) fn new(
-        store: &mut ParamStore,
-        name: &str,
-        cin: usize,
-        spec: ConvSpec,
-    ) -> Result<Self> {
-        let std = (2.0 / (9 * cin) as f32).sqrt();
-        Self::with_init(store, name, cin, spec, Init::Normal(std))
-    }
-
     pub(crate) fn with_init(
         store: &mut ParamStore,
         name: &str,
@@ -294,10 +283,13 @@ impl Conv {
     }
 }
 
-/// A stack of convolutions with ReLU between them (and after the last).
+/// A stack of convolutions with ReLU between them (and after the last). In a residual stack,
+/// each convolution that keeps the map's shape (stride 1, as many channels out as in) adds its
+/// input before the ReLU: `relu(x + conv(x))`.
 #[derive(Clone, Debug)]
 pub(crate) struct ConvStack {
-    convs: Vec<Conv>,
+    /// Each convolution and whether it adds its input.
+    convs: Vec<(Conv, bool)>,
 }
 
 impl ConvStack {
@@ -306,11 +298,19 @@ impl ConvStack {
         name: &str,
         cin: usize,
         specs: &[ConvSpec],
+        residual: bool,
     ) -> Result<Self> {
         let mut convs = Vec::with_capacity(specs.len());
         let mut c = cin;
         for (i, s) in specs.iter().enumerate() {
-            convs.push(Conv::new(store, &format!("{name}.{i}"), c, *s)?);
+            let skip = residual && s.stride == 1 && s.channels == c;
+            let name = format!("{name}.{i}");
+            // Kaiming-normal, halved on a residual branch so the sum starts near its input.
+            let std = (2.0 / (9 * c) as f32).sqrt() * if skip { 0.5 } else { 1.0 };
+            convs.push((
+                Conv::with_init(store, &name, c, *s, Init::Normal(std))?,
+                skip,
+            ));
             c = s.channels;
         }
         Ok(Self { convs })
@@ -318,8 +318,9 @@ impl ConvStack {
 
     pub(crate) fn forward(&self, x: &Tensor, cache: &IndexCache) -> Result<Tensor> {
         let mut h = x.clone();
-        for conv in &self.convs {
-            h = conv.forward(&h, cache)?.relu()?;
+        for (conv, skip) in &self.convs {
+            let y = conv.forward(&h, cache)?;
+            h = if *skip { (y + &h)?.relu()? } else { y.relu()? };
         }
         Ok(h)
     }
@@ -330,7 +331,7 @@ impl ConvStack {
     pub(crate) fn forward_inference(&self, x: &Tensor) -> Result<Tensor> {
         let (b, mut h, mut w, mut c) = x.dims4()?;
         let mut act: Vec<f32> = x.flatten_all()?.to_vec1()?;
-        for conv in &self.convs {
+        for (conv, skip) in &self.convs {
             let shape = ConvShape {
                 h,
                 w,
@@ -347,7 +348,7 @@ impl ConvStack {
                 .chunks_exact(h * w * c)
                 .zip(y.chunks_exact_mut(ho * wo * shape.co))
             {
-                conv3x3_relu(shape, image, &weight, &bias, out);
+                conv3x3_relu(shape, image, &weight, &bias, *skip, out);
             }
             (act, h, w, c) = (y, ho, wo, shape.co);
         }
@@ -439,7 +440,6 @@ mod tests {
     #[test]
     fn conv_stack_inference_matches_the_tracked_forward() -> Result<()> {
         let dev = Device::Cpu;
-        let mut store = ParamStore::new(11, &dev);
         let specs = [
             ConvSpec::new(5, 1),
             ConvSpec::new(6, 2),
@@ -450,19 +450,30 @@ mod tests {
             },
             ConvSpec::new(3, 3),
         ];
-        let stack = ConvStack::new(&mut store, "enc", 3, &specs)?;
-        for (var, name) in store.vars().iter().zip(store.names()) {
-            if name.ends_with("bias") {
-                var.set(&Tensor::randn(0f32, 0.3, var.dims(), &dev)?)?;
+        for residual in [false, true] {
+            let mut store = ParamStore::new(11, &dev);
+            let mut specs = specs.to_vec();
+            if residual {
+                // Two layers that keep the shape, one at each resolution.
+                specs.insert(2, ConvSpec::new(6, 1));
+                specs.push(ConvSpec::new(3, 2));
             }
+            let stack = ConvStack::new(&mut store, "enc", 3, &specs, residual)?;
+            let skips = stack.convs.iter().filter(|(_, skip)| *skip).count();
+            assert_eq!(skips, if residual { 2 } else { 0 });
+            for (var, name) in store.vars().iter().zip(store.names()) {
+                if name.ends_with("bias") {
+                    var.set(&Tensor::randn(0f32, 0.3, var.dims(), &dev)?)?;
+                }
+            }
+            let x = Tensor::randn(0f32, 1.0, (2, 9, 7, 3), &dev)?;
+            let tracked = stack.forward(&x, &IndexCache::default())?;
+            let fast = stack.forward_inference(&x)?;
+            assert_eq!(tracked.dims(), fast.dims());
+            assert_eq!(fast.dims(), &[2, 5, 4, 3]);
+            let diff = (tracked - fast)?.abs()?.max_all()?.to_scalar::<f32>()?;
+            assert!(diff < 1e-4, "residual {residual}: max difference {diff}");
         }
-        let x = Tensor::randn(0f32, 1.0, (2, 9, 7, 3), &dev)?;
-        let tracked = stack.forward(&x, &IndexCache::default())?;
-        let fast = stack.forward_inference(&x)?;
-        assert_eq!(tracked.dims(), fast.dims());
-        assert_eq!(fast.dims(), &[2, 5, 4, 3]);
-        let diff = (tracked - fast)?.abs()?.max_all()?.to_scalar::<f32>()?;
-        assert!(diff < 1e-4, "max difference {diff}");
         Ok(())
     }
 
@@ -475,7 +486,7 @@ mod tests {
         let cache = IndexCache::default();
         for (dilation, stride) in [(1, 1), (2, 1), (3, 1), (1, 2)] {
             let mut store = ParamStore::new(dilation as u64, &dev);
-            let conv = Conv::new(
+            let conv = Conv::with_init(
                 &mut store,
                 "c",
                 cin,
@@ -484,6 +495,7 @@ mod tests {
                     dilation,
                     stride,
                 },
+                Init::Normal(0.3),
             )?;
             let bias = Tensor::new(&[0.1f32, -0.2, 0.3, 0.0], &dev)?;
             let x = Tensor::randn(0f32, 1.0, (b, h, w, cin), &dev)?;

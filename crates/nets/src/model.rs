@@ -114,6 +114,11 @@ pub struct ContextConfig {
     /// maze twice without the holes of a single 1-2-4-8-16 ramp; it took VIN's test sets from
     /// 95.0 / 92.5% (16x16 / 28x28, 7 convolutions, one ramp) to the figures in the README.
     pub encoder: Vec<ConvSpec>,
+    /// Residual encoder: each convolution that keeps its input's channel count adds its input
+    /// before the ReLU, `relu(x + conv(x))`, so a deep encoder trains like a shallow one.
+    /// Off in the paper's encoder (and in models saved before it existed).
+    #[serde(default)]
+    pub residual: bool,
     /// Feed a one-hot goal map to the encoder beside the obstacle map.
     pub goal_channel: bool,
     /// Coordinates enter as `(cell - (n - 1) / 2) / coord_scale`, the same for every maze size.
@@ -176,6 +181,7 @@ impl Default for ContextConfig {
             ]
             .map(|(c, d)| ConvSpec::new(c, d))
             .to_vec(),
+            residual: false,
             goal_channel: true,
             coord_scale: 16.0,
             mlp: MlpConfig {
@@ -672,8 +678,13 @@ impl FieldNet {
                 Net::Goal(Mlp::new(&mut store, "mlp", &c.mlp, input, 1)?)
             }
             ModelConfig::Context(c) => {
-                let encoder =
-                    ConvStack::new(&mut store, "encoder", cin(c.goal_channel), &c.encoder)?;
+                let encoder = ConvStack::new(
+                    &mut store,
+                    "encoder",
+                    cin(c.goal_channel),
+                    &c.encoder,
+                    c.residual,
+                )?;
                 let mut feat = c.encoder.last().map_or(0, |s| s.channels);
                 let propagation = match c.propagation {
                     Some(p) => {
@@ -699,8 +710,13 @@ impl FieldNet {
                 }
             }
             ModelConfig::Hyper(c) => {
-                let encoder =
-                    ConvStack::new(&mut store, "encoder", cin(c.goal_channel), &c.encoder)?;
+                let encoder = ConvStack::new(
+                    &mut store,
+                    "encoder",
+                    cin(c.goal_channel),
+                    &c.encoder,
+                    false,
+                )?;
                 let mut width = c.encoder.last().map_or(0, |s| s.channels);
                 let mut fc = Vec::new();
                 for (i, &w) in c.fc.iter().enumerate() {
