@@ -107,15 +107,24 @@ unsafe fn conv_avx512(args: Args, out: &mut [f32]) {
 
 /// Splits the output channels into blocks of the widest width among 32, 16, 8, 4 and 1 that
 /// divides Co, so each block's accumulators are a fixed-size array the compiler keeps in
-/// vector registers.
+/// vector registers. With `SPLIT` the input channels are dealt round-robin to 2 sets of
+/// accumulators for 32-wide blocks and 4 for narrower ones: 8 independent multiply-add chains
+/// per pixel pair either way, enough to keep both FMA units busy, which 32 vector registers
+/// (AVX-512) hold and 16 (AVX2) do not. (With 2 sets, a 16-channel layer ran at half the
+/// rate of a 32-channel one.)
 #[inline(always)]
 fn conv_blocks<const FMA: bool, const SPLIT: bool>(args: Args, out: &mut [f32]) {
-    match args.shape.co {
-        co if co % 32 == 0 => conv_block::<32, FMA, SPLIT>(args, out),
-        co if co % 16 == 0 => conv_block::<16, FMA, SPLIT>(args, out),
-        co if co % 8 == 0 => conv_block::<8, FMA, SPLIT>(args, out),
-        co if co % 4 == 0 => conv_block::<4, FMA, SPLIT>(args, out),
-        _ => conv_block::<1, FMA, SPLIT>(args, out),
+    match (args.shape.co, SPLIT) {
+        (co, false) if co % 32 == 0 => conv_block::<32, FMA, 1>(args, out),
+        (co, true) if co % 32 == 0 => conv_block::<32, FMA, 2>(args, out),
+        (co, false) if co % 16 == 0 => conv_block::<16, FMA, 1>(args, out),
+        (co, true) if co % 16 == 0 => conv_block::<16, FMA, 4>(args, out),
+        (co, false) if co % 8 == 0 => conv_block::<8, FMA, 1>(args, out),
+        (co, true) if co % 8 == 0 => conv_block::<8, FMA, 4>(args, out),
+        (co, false) if co % 4 == 0 => conv_block::<4, FMA, 1>(args, out),
+        (co, true) if co % 4 == 0 => conv_block::<4, FMA, 4>(args, out),
+        (_, false) => conv_block::<1, FMA, 1>(args, out),
+        (_, true) => conv_block::<1, FMA, 4>(args, out),
     }
 }
 
@@ -138,7 +147,7 @@ fn axis_taps(n_out: usize, n_in: usize, dilation: usize, stride: usize) -> Vec<[
 /// latency of the previous multiply-add). A tap inside the map for only one pixel of the pair
 /// (at the borders) runs for that pixel alone.
 #[inline(always)]
-fn conv_block<const B: usize, const FMA: bool, const SPLIT: bool>(args: Args, out: &mut [f32]) {
+fn conv_block<const B: usize, const FMA: bool, const W: usize>(args: Args, out: &mut [f32]) {
     let Args {
         shape,
         input,
@@ -165,44 +174,48 @@ fn conv_block<const B: usize, const FMA: bool, const SPLIT: bool>(args: Args, ou
         for ox in (0..wo).step_by(2) {
             let pair = ox + 1 < wo;
             for (block, block_rows) in packed.chunks_exact(9 * c).enumerate() {
+                // Per pixel of the pair, up to 4 sets of accumulators (W in use), the first
+                // starting at the bias. Separate locals, not one array: the compiler keeps
+                // locals in registers, where an array indexed in a loop went through memory
+                // (10x slower).
                 let init: [f32; B] = bias[block * B..][..B].try_into().expect("B values");
-                let (mut acc0, mut acc1) = (init, init);
-                let (mut odd0, mut odd1) = ([0.0; B], [0.0; B]);
+                let zero = [0.0f32; B];
+                let (mut a0, mut a1, mut a2, mut a3) = (init, zero, zero, zero);
+                let (mut b0, mut b1, mut b2, mut b3) = (init, zero, zero, zero);
                 for (ky, iy) in ty.iter().enumerate() {
                     let Some(iy) = *iy else { continue };
                     for kx in 0..3 {
                         let rows = &block_rows[(ky * 3 + kx) * c..][..c];
                         let second = if pair { taps_x[ox + 1][kx] } else { None };
                         match (taps_x[ox][kx], second) {
-                            (Some(i0), Some(i1)) => madd_pair::<B, FMA, SPLIT>(
-                                [&mut acc0, &mut acc1],
-                                [&mut odd0, &mut odd1],
+                            (Some(i0), Some(i1)) => madd_pair::<B, FMA, W>(
+                                [&mut a0, &mut a1, &mut a2, &mut a3],
+                                [&mut b0, &mut b1, &mut b2, &mut b3],
                                 [pixel(iy, i0), pixel(iy, i1)],
                                 rows,
                             ),
-                            (Some(i), None) => madd_row::<B, FMA>(&mut acc0, pixel(iy, i), rows),
-                            (None, Some(i)) => madd_row::<B, FMA>(&mut acc1, pixel(iy, i), rows),
+                            (Some(i), None) => madd_row::<B, FMA>(&mut a0, pixel(iy, i), rows),
+                            (None, Some(i)) => madd_row::<B, FMA>(&mut b0, pixel(iy, i), rows),
                             (None, None) => {}
                         }
                     }
                 }
-                let store = |dst: &mut [f32], x: usize, acc: [f32; B], odd: [f32; B]| {
+                let store = |dst: &mut [f32], x: usize, sets: [[f32; B]; 4]| {
                     let dst = &mut dst[x * co + block * B..][..B];
+                    let mut sum = sets[0];
+                    for set in &sets[1..W] {
+                        sum.iter_mut().zip(set).for_each(|(s, v)| *s += v);
+                    }
                     if residual {
                         // Stride 1 and C == Co: the output pixel's input is the same pixel.
                         let skip = &pixel(oy, x)[block * B..][..B];
-                        for (((o, v), u), s) in dst.iter_mut().zip(acc).zip(odd).zip(skip) {
-                            *o = (v + u + s).max(0.0);
-                        }
-                    } else {
-                        for ((o, v), u) in dst.iter_mut().zip(acc).zip(odd) {
-                            *o = (v + u).max(0.0);
-                        }
+                        sum.iter_mut().zip(skip).for_each(|(s, v)| *s += v);
                     }
+                    dst.iter_mut().zip(sum).for_each(|(o, v)| *o = v.max(0.0));
                 };
-                store(out_row, ox, acc0, odd0);
+                store(out_row, ox, [a0, a1, a2, a3]);
                 if pair {
-                    store(out_row, ox + 1, acc1, odd1);
+                    store(out_row, ox + 1, [b0, b1, b2, b3]);
                 }
             }
         }
@@ -221,30 +234,39 @@ fn madd<const B: usize, const FMA: bool>(acc: &mut [f32; B], a: f32, wt: &[f32; 
     }
 }
 
-/// Two pixels' taps sharing each weight row. With `SPLIT`, odd input channels go to a second
-/// set of accumulators (`odd`): four independent chains instead of two, which 32 vector
-/// registers (AVX-512) hold and 16 (AVX2) do not.
+/// Two pixels' taps sharing each weight row, input channel `ci` going to accumulator set
+/// `ci % W` of its pixel (W is 1, 2 or 4; the channels past the last whole group of W to the
+/// first set).
 #[inline(always)]
-fn madd_pair<const B: usize, const FMA: bool, const SPLIT: bool>(
-    [acc0, acc1]: [&mut [f32; B]; 2],
-    [odd0, odd1]: [&mut [f32; B]; 2],
+fn madd_pair<const B: usize, const FMA: bool, const W: usize>(
+    [p0, p1, p2, p3]: [&mut [f32; B]; 4],
+    [q0, q1, q2, q3]: [&mut [f32; B]; 4],
     [s0, s1]: [&[f32]; 2],
     rows: &[[f32; B]],
 ) {
-    let mut done = 0;
-    if SPLIT {
-        let (p0, p1) = (s0.chunks_exact(2), s1.chunks_exact(2));
-        done = 2 * p0.len();
-        for ((a0, a1), wt) in p0.zip(p1).zip(rows.chunks_exact(2)) {
-            madd::<B, FMA>(acc0, a0[0], &wt[0]);
-            madd::<B, FMA>(acc1, a1[0], &wt[0]);
-            madd::<B, FMA>(odd0, a0[1], &wt[1]);
-            madd::<B, FMA>(odd1, a1[1], &wt[1]);
+    let whole = s0.len() / W * W;
+    let groups = s0[..whole]
+        .chunks_exact(W)
+        .zip(s1[..whole].chunks_exact(W))
+        .zip(rows.chunks_exact(W));
+    for ((x, y), wt) in groups {
+        madd::<B, FMA>(p0, x[0], &wt[0]);
+        madd::<B, FMA>(q0, y[0], &wt[0]);
+        if W >= 2 {
+            madd::<B, FMA>(p1, x[1], &wt[1]);
+            madd::<B, FMA>(q1, y[1], &wt[1]);
+        }
+        if W >= 4 {
+            madd::<B, FMA>(p2, x[2], &wt[2]);
+            madd::<B, FMA>(q2, y[2], &wt[2]);
+            madd::<B, FMA>(p3, x[3], &wt[3]);
+            madd::<B, FMA>(q3, y[3], &wt[3]);
         }
     }
-    for ((&a0, &a1), wt) in s0[done..].iter().zip(&s1[done..]).zip(&rows[done..]) {
-        madd::<B, FMA>(acc0, a0, wt);
-        madd::<B, FMA>(acc1, a1, wt);
+    let rest = s0[whole..].iter().zip(&s1[whole..]).zip(&rows[whole..]);
+    for ((&a, &b), wt) in rest {
+        madd::<B, FMA>(p0, a, wt);
+        madd::<B, FMA>(q0, b, wt);
     }
 }
 
