@@ -139,6 +139,10 @@ fn all_configs() -> Vec<ModelConfig> {
             encoding: TargetEncoding::Reciprocal,
         }),
         ModelConfig::Context(small_context()),
+        ModelConfig::Context(ContextConfig {
+            residual: true,
+            ..small_context()
+        }),
         ModelConfig::Hyper(small_hyper()),
         ModelConfig::Context(ContextConfig {
             propagation: Some(PropagationConfig {
