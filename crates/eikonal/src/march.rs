@@ -203,6 +203,25 @@ impl<const N: usize> Marcher<N> {
                 0.5 * (lo + hi + (2.0 * tau * tau - d * d).sqrt())
             };
         }
+        if N == 3 {
+            // Closed form of the 3D first-order update, with selects: sort the three upwind
+            // values, then take one, two or all three axes as the solution passes each.
+            let (x, y, z) = sort3(a[0], a[1], a[2]);
+            let (d1, d2) = (y - x, z - x);
+            let tau2 = tau * tau;
+            let one = tau;
+            let two = 0.5 * (d1 + (2.0 * tau2 - d1 * d1).max(0.0).sqrt());
+            let s = d1 + d2;
+            let three = (s + (s * s - 3.0 * (d1 * d1 + d2 * d2 - tau2)).max(0.0).sqrt()) / 3.0;
+            let w = if one <= d1 {
+                one
+            } else if two <= d2 {
+                two
+            } else {
+                three
+            };
+            return x + w;
+        }
         // First order always has a real root once sorted (u > v implies a real crossing).
         Self::solve(first, tau)
             .unwrap_or(min_a1 + tau)
@@ -223,6 +242,14 @@ impl<const N: usize> Marcher<N> {
             }
         }
     }
+}
+
+/// The three values in increasing order (infinities last), with min/max only.
+#[inline(always)]
+fn sort3(a: f64, b: f64, c: f64) -> (f64, f64, f64) {
+    let (lo, hi) = (a.min(b), a.max(b));
+    let (mid, top) = (hi.min(c), hi.max(c));
+    (lo.min(mid), lo.max(mid), top)
 }
 
 /// Runs fast marching and returns the C-order values (f32; infinity where not reached).
