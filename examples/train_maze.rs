@@ -77,8 +77,9 @@ struct Args {
     /// Output encoding: `reciprocal` (the paper's 1/(1+d)) or `linear:SCALE` (1 - d/SCALE).
     #[arg(long, default_value = "reciprocal")]
     encoding: String,
-    /// Context encoder convolutions as CHANNELS:DILATION, comma-separated (default: the
-    /// library's 11-layer dilated encoder).
+    /// Context encoder convolutions as CHANNELS:DILATION, comma-separated, `Nx[...]` repeating
+    /// a group (`16:1,8x[16:1,16:2,16:4,16:8],32:1`: 34 convolutions). Default: the library's
+    /// 11-layer dilated encoder.
     #[arg(long)]
     encoder: Option<String>,
     /// Residual context encoder: each convolution that keeps the channel count adds its input
@@ -146,6 +147,41 @@ fn encoding(s: &str) -> Result<TargetEncoding> {
         },
         _ => bail!("unknown --encoding `{s}` (reciprocal or linear:SCALE)"),
     })
+}
+
+/// Convolutions from `CHANNELS:DILATION` items, comma-separated, where `Nx[ITEMS]` repeats a
+/// group N times: `16:1,8x[16:1,16:2,16:4,16:8],32:1` is 34 convolutions.
+fn encoder(spec: &str) -> Result<Vec<ConvSpec>> {
+    let mut out = Vec::new();
+    let mut rest = spec.trim();
+    while !rest.is_empty() {
+        let item_end = match rest.find('[') {
+            Some(open) if rest[..open].find(',').is_none() => {
+                let close = rest.find(']').context("`[` without `]`")?;
+                let times: usize = rest[..open]
+                    .trim()
+                    .strip_suffix('x')
+                    .context("a group is written Nx[...]")?
+                    .trim()
+                    .parse()?;
+                let group = encoder(&rest[open + 1..close])?;
+                for _ in 0..times {
+                    out.extend_from_slice(&group);
+                }
+                close + 1
+            }
+            _ => {
+                let end = rest.find(',').unwrap_or(rest.len());
+                let item = rest[..end].trim();
+                let (ch, d) = item.split_once(':').unwrap_or((item, "1"));
+                out.push(ConvSpec::new(ch.trim().parse()?, d.trim().parse()?));
+                end
+            }
+        };
+        rest = rest[item_end..].trim_start();
+        rest = rest.strip_prefix(',').unwrap_or(rest).trim_start();
+    }
+    Ok(out)
 }
 
 fn main() -> Result<()> {
@@ -258,14 +294,8 @@ fn main() -> Result<()> {
                         ..ContextConfig::default()
                     };
                     if let Some(spec) = &args.encoder {
-                        c.encoder = spec
-                            .split(',')
-                            .map(|l| {
-                                let (ch, d) = l.split_once(':').unwrap_or((l, "1"));
-                                Ok(ConvSpec::new(ch.trim().parse()?, d.trim().parse()?))
-                            })
-                            .collect::<Result<_>>()
-                            .with_context(|| format!("bad --encoder `{spec}`"))?;
+                        c.encoder =
+                            encoder(spec).with_context(|| format!("bad --encoder `{spec}`"))?;
                     }
                     if args.propagation > 0 {
                         c.propagation = Some(PropagationConfig {
