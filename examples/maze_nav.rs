@@ -15,7 +15,8 @@ use anyhow::{bail, Context, Result};
 use clap::Parser;
 use envfield::eikonal::{FastMarching, GraphDistance};
 use envfield::grid::{
-    write_atomic, Cell2, FieldModel, HeatMapStyle, Maze, MoveRule, Neighbourhood2, Symmetric,
+    write_atomic, Cell2, Ensemble, FieldModel, HeatMapStyle, Maze, MoveRule, Neighbourhood2,
+    Symmetric,
 };
 use envfield::mazes::{GeneratorKind, MazeGenerator};
 use envfield::nets::{FieldNet, Vin};
@@ -67,6 +68,7 @@ struct Args {
     /// Weights for `field` or `hyper` (default: models/context.safetensors or
     /// models/hyper.safetensors; a file named <arch>_<size>.safetensors there wins for mazes of
     /// that size). VIN always loads models/vin_<size>.safetensors unless this names a VIN file.
+    /// Several files, comma-separated, make an ensemble: the mean of their fields.
     #[arg(long)]
     model: Option<PathBuf>,
     /// Average the learned field (`field`, `hyper`) over this many symmetric views of each maze
@@ -139,8 +141,21 @@ impl Choice {
             "field" | "hyper" => {
                 let arch = if name == "field" { "context" } else { "hyper" };
                 let file = model_file(arch, size, model)?;
-                let net =
-                    FieldNet::load(&file).with_context(|| format!("loading {}", file.display()))?;
+                let load = |file: &Path| {
+                    FieldNet::load(file).with_context(|| format!("loading {}", file.display()))
+                };
+                let name = file.to_string_lossy();
+                if name.contains(',') {
+                    // An ensemble: the mean of the listed models' fields.
+                    let nets = name
+                        .split(',')
+                        .map(|f| load(Path::new(f)))
+                        .collect::<Result<Vec<_>>>()?;
+                    let ensemble: Box<dyn FieldModel + Send + Sync> =
+                        Box::new(Ensemble::new(nets)?);
+                    return Ok(Choice::Field(FieldDescent::new(ensemble, rule)));
+                }
+                let net = load(&file)?;
                 if views == 1 {
                     Box::new(net)
                 } else {

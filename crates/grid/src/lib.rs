@@ -34,6 +34,7 @@
 //! ```
 
 mod cell;
+mod ensemble;
 mod error;
 mod field;
 mod grid;
@@ -47,6 +48,7 @@ mod symmetry;
 pub mod synth;
 
 pub use cell::{Cell2, Cell3, Point2, Point3};
+pub use ensemble::Ensemble;
 pub use error::{GridError, Result};
 pub use field::{Field2, Field3};
 pub use grid::{Grid2, Grid3};
