@@ -103,6 +103,11 @@ struct Args {
     /// goal: the path bends around obstacles). Also applies to a resumed run.
     #[arg(long)]
     detour_fraction: Option<f64>,
+    /// Fraction of anchor queries drawn from far cells (at least half the maze's largest
+    /// reachable distance from the goal), before --detour-fraction applies. Also applies to a
+    /// resumed run.
+    #[arg(long)]
+    far_fraction: Option<f64>,
     /// Weight of the descent loss (0: off): queries in groups of a cell and its 8 neighbours;
     /// each move other than the best ones should score below the best by --descent-margin
     /// (hinge). Needs --queries divisible by 9. Also applies to a resumed run.
@@ -252,6 +257,9 @@ fn main() -> Result<()> {
             if let Some(f) = args.detour_fraction {
                 t.set_detour_fraction(f)?;
             }
+            if let Some(f) = args.far_fraction {
+                t.set_far_fraction(f)?;
+            }
             if let Some(w) = args.descent_weight {
                 t.set_descent(w, args.descent_margin, rule)?;
             }
@@ -330,6 +338,7 @@ fn main() -> Result<()> {
                 validation_samples: 64,
                 neighbour_weight: args.neighbour_weight.unwrap_or(0.0),
                 detour_fraction: args.detour_fraction.unwrap_or(0.0),
+                far_fraction: args.far_fraction.unwrap_or(0.0),
                 descent_weight: args.descent_weight.unwrap_or(0.0),
                 descent_margin: args.descent_margin,
                 descent_rule: rule,

@@ -60,6 +60,13 @@ pub struct TrainConfig {
     /// over the grid. 0 (the default) samples uniformly.
     #[serde(default)]
     pub detour_fraction: f64,
+    /// Fraction of the anchor queries drawn from *far cells*: reachable cells at least half
+    /// the maze's largest reachable distance from the goal. Far cells are few (about 2% of a
+    /// 28x28 maze's cells lie 30 or more cells from its goal) but that is where descent fails
+    /// most. Drawn first; the rest follow `detour_fraction`. 0 (the default) draws none
+    /// specially. Not used with `dense`.
+    #[serde(default)]
+    pub far_fraction: f64,
     /// Weight of the descent loss. Queries then come in groups of nine: an anchor cell and its
     /// 8 neighbours (a neighbour that is not a move under `descent_rule` is replaced by the
     /// anchor and left out). Descent steps to the neighbour of best output, so each neighbour
@@ -113,6 +120,7 @@ impl Default for TrainConfig {
             validation_samples: 256,
             neighbour_weight: 0.0,
             detour_fraction: 0.0,
+            far_fraction: 0.0,
             descent_weight: 0.0,
             descent_margin: 0.005,
             descent_rule: MoveRule::Strict,
@@ -144,6 +152,7 @@ impl TrainConfig {
                 || self.grouped()
                 || self.queries_per_item % 2 == 0)
             && (0.0..=1.0).contains(&self.detour_fraction)
+            && (0.0..=1.0).contains(&self.far_fraction)
             && self.descent_weight >= 0.0
             && (self.descent_weight == 0.0 || self.dense || self.queries_per_item % GROUP == 0)
             && self.descent_margin > 0.0
@@ -154,7 +163,7 @@ impl TrainConfig {
             Err(NetsError::InvalidConfig(format!(
                 "training: need lr > 0, final_lr_fraction in [0, 1], betas in [0, 1), eps > 0, \
                  weight_decay >= 0, batch_items, queries_per_item and validation_samples >= 1, \
-                 neighbour_weight >= 0 with an even queries_per_item (unless grouped), detour_fraction in [0, 1], \
+                 neighbour_weight >= 0 with an even queries_per_item (unless grouped), detour_fraction and far_fraction in [0, 1], \
                  descent_weight >= 0 with queries_per_item a multiple of 9 (unless dense), \
                  descent_margin > 0, ema_decay in [0, 1) (got {self:?})"
             )))
@@ -374,6 +383,15 @@ impl Trainer {
         self.update_config(|c| c.detour_fraction = fraction)
     }
 
+    /// Sets the fraction of anchor queries drawn from far cells (see
+    /// [`TrainConfig::far_fraction`]).
+    ///
+    /// # Errors
+    /// [`NetsError::InvalidConfig`] for a fraction outside `[0, 1]`.
+    pub fn set_far_fraction(&mut self, fraction: f64) -> Result<()> {
+        self.update_config(|c| c.far_fraction = fraction)
+    }
+
     /// Sets the descent loss (see [`TrainConfig::descent_weight`]): its weight, margin and
     /// move rule, for example to fine-tune a resumed run with it.
     ///
@@ -542,8 +560,15 @@ impl Trainer {
             } else {
                 Vec::new()
             };
+            let far = if self.config.far_fraction > 0.0 && !self.config.dense {
+                far_cells(s)
+            } else {
+                Vec::new()
+            };
             let anchor = |rng: &mut SplitMix64| {
-                if !detours.is_empty() && rng.next_f64() < self.config.detour_fraction {
+                if !far.is_empty() && rng.next_f64() < self.config.far_fraction {
+                    far[rng.below(far.len())]
+                } else if !detours.is_empty() && rng.next_f64() < self.config.detour_fraction {
                     detours[rng.below(detours.len())]
                 } else {
                     rng.below(rows * cols)
@@ -938,6 +963,26 @@ fn detour_cells(s: &Sample) -> Vec<usize> {
             let dc = (i % cols).abs_diff(s.goal.col) as f32;
             is_detour(d, dr, dc).then_some(i)
         })
+        .collect()
+}
+
+/// The reachable cells of `s` at least half its largest reachable distance from the goal
+/// (none when the goal reaches nothing).
+fn far_cells(s: &Sample) -> Vec<usize> {
+    let distance: Vec<f32> = s
+        .target
+        .iter()
+        .map(|&t| envfield_mazes::decode_target(t))
+        .collect();
+    let max = distance
+        .iter()
+        .filter(|d| d.is_finite())
+        .fold(0.0f32, |m, &d| m.max(d));
+    if max <= 0.0 {
+        return Vec::new();
+    }
+    (0..distance.len())
+        .filter(|&i| distance[i].is_finite() && distance[i] >= 0.5 * max)
         .collect()
 }
 

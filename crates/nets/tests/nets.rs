@@ -469,6 +469,64 @@ fn detour_sampling_draws_cells_behind_obstacles() {
     assert_eq!(drawn, 5 * 6 * 40);
 }
 
+/// With `far_fraction` 1 every query lies at least half the maze's largest reachable distance
+/// from the goal; out of range it is a config error.
+#[test]
+fn far_sampling_draws_cells_far_from_the_goal() {
+    let data = dataset(16, 6, 2, 9);
+    let cfg = TrainConfig {
+        batch_items: 6,
+        queries_per_item: 40,
+        far_fraction: 1.0,
+        ..TrainConfig::default()
+    };
+    let net = || FieldNet::new(ModelConfig::Context(small_context()), 3).unwrap();
+    let bad = TrainConfig {
+        far_fraction: -0.1,
+        ..cfg.clone()
+    };
+    assert!(matches!(
+        Trainer::new(net(), bad),
+        Err(NetsError::InvalidConfig(_))
+    ));
+    let trainer = Trainer::new(net(), cfg).unwrap();
+    let mut drawn = 0;
+    for step in 0..5 {
+        let (batch, _) = trainer.sample_batch(&data, step).unwrap();
+        for (item, queries) in batch.queries.chunks_exact(80).enumerate() {
+            let goal = (batch.goals[2 * item], batch.goals[2 * item + 1]);
+            let obstacles = &batch.obstacles[item * 256..(item + 1) * 256];
+            let sample = data
+                .samples
+                .iter()
+                .find(|s| {
+                    (s.goal.row as f32, s.goal.col as f32) == goal
+                        && s.grid
+                            .obstacles()
+                            .iter()
+                            .map(|&o| o as u8 as f32)
+                            .eq(obstacles.iter().copied())
+                })
+                .expect("the item's sample");
+            let distance: Vec<f32> = sample
+                .target
+                .iter()
+                .map(|&t| envfield_mazes::decode_target(t))
+                .collect();
+            let max = distance
+                .iter()
+                .filter(|d| d.is_finite())
+                .fold(0f32, |m, &d| m.max(d));
+            for q in queries.chunks_exact(2) {
+                let d = distance[q[0] as usize * 16 + q[1] as usize];
+                assert!(d.is_finite() && d >= 0.5 * max, "{d} of at most {max}");
+                drawn += 1;
+            }
+        }
+    }
+    assert_eq!(drawn, 5 * 6 * 40);
+}
+
 /// With a descent weight, queries come in groups of nine: an anchor, then each neighbour in
 /// `DIRECTIONS_8` order that the rule allows as a move, the anchor itself in the other slots;
 /// a query count not divisible by 9 is a config error, and training runs.
