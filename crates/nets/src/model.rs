@@ -115,8 +115,9 @@ pub struct ContextConfig {
     /// 95.0 / 92.5% (16x16 / 28x28, 7 convolutions, one ramp) to the figures in the README.
     pub encoder: Vec<ConvSpec>,
     /// Residual encoder: each convolution that keeps its input's channel count adds its input
-    /// before the ReLU, `relu(x + conv(x))`, so a deep encoder trains like a shallow one.
-    /// Off in the paper's encoder (and in models saved before it existed).
+    /// before the ReLU, `relu(x + conv(x))`, the usual aid for training deep stacks. Off in the
+    /// paper's encoder (and in models saved before it existed). On gridworld mazes a residual
+    /// 20-layer encoder scored what the default 11 layers do (`models/README.md`).
     #[serde(default)]
     pub residual: bool,
     /// Feed a one-hot goal map to the encoder beside the obstacle map.
