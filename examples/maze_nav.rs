@@ -141,25 +141,20 @@ impl Choice {
             "field" | "hyper" => {
                 let arch = if name == "field" { "context" } else { "hyper" };
                 let file = model_file(arch, size, model)?;
-                let load = |file: &Path| {
-                    FieldNet::load(file).with_context(|| format!("loading {}", file.display()))
+                // Several comma-separated files: an ensemble, the mean of their fields.
+                let mut nets = file
+                    .to_string_lossy()
+                    .split(',')
+                    .map(|f| FieldNet::load(f).with_context(|| format!("loading {f}")))
+                    .collect::<Result<Vec<_>>>()?;
+                let learned: Box<dyn FieldModel + Send + Sync> = match nets.len() {
+                    1 => Box::new(nets.remove(0)),
+                    _ => Box::new(Ensemble::new(nets)?),
                 };
-                let name = file.to_string_lossy();
-                if name.contains(',') {
-                    // An ensemble: the mean of the listed models' fields.
-                    let nets = name
-                        .split(',')
-                        .map(|f| load(Path::new(f)))
-                        .collect::<Result<Vec<_>>>()?;
-                    let ensemble: Box<dyn FieldModel + Send + Sync> =
-                        Box::new(Ensemble::new(nets)?);
-                    return Ok(Choice::Field(FieldDescent::new(ensemble, rule)));
-                }
-                let net = load(&file)?;
                 if views == 1 {
-                    Box::new(net)
+                    learned
                 } else {
-                    Box::new(Symmetric::new(net, views)?)
+                    Box::new(Symmetric::new(learned, views)?)
                 }
             }
             "vin" => {
