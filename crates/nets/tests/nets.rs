@@ -2,7 +2,7 @@
 //! resuming training.
 
 use envfield_grid::{Cell2, FieldModel, Grid2, MoveRule, Point2};
-use envfield_mazes::{Dataset, DatasetConfig, GeneratorKind, MazeGenerator, TargetKind};
+use envfield_mazes::{Dataset, DatasetConfig, GeneratorKind, MazeGenerator, Sample, TargetKind};
 use envfield_nets::{
     Activation, Batch, ContextConfig, ConvSpec, FieldNet, GoalConfig, HyperConfig, MlpConfig,
     ModelConfig, NetsError, PlainConfig, PropagationConfig, TargetEncoding, TrainConfig, Trainer,
@@ -431,11 +431,37 @@ fn detour_sampling_draws_cells_behind_obstacles() {
         Err(NetsError::InvalidConfig(_))
     ));
     let trainer = Trainer::new(net(), cfg).unwrap();
-    let mut drawn = 0;
-    for step in 0..5 {
-        let (batch, _) = trainer.sample_batch(&data, step).unwrap();
-        for (item, queries) in batch.queries.chunks_exact(80).enumerate() {
+    let queries = sampled_queries(&trainer, &data, 5);
+    assert_eq!(queries.len(), 5 * 6 * 40);
+    for (sample, r, c) in queries {
+        let d = envfield_mazes::decode_target(sample.target[r * 16 + c]);
+        let (dr, dc) = (
+            r.abs_diff(sample.goal.row) as f32,
+            c.abs_diff(sample.goal.col) as f32,
+        );
+        let octile = dr.max(dc) + (2f32.sqrt() - 1.0) * dr.min(dc);
+        assert!(
+            d.is_finite() && d > octile + 0.5,
+            "({r}, {c}): {d} vs {octile}"
+        );
+    }
+}
+
+/// Every query of the batches of steps `0..steps` (16x16 mazes, single queries) as
+/// `(sample it was drawn for, row, col)`: the batch's item is matched to its sample by goal and
+/// obstacles.
+fn sampled_queries<'a>(
+    trainer: &Trainer,
+    data: &'a Dataset,
+    steps: u64,
+) -> Vec<(&'a Sample, usize, usize)> {
+    let mut out = Vec::new();
+    for step in 0..steps {
+        let (batch, _) = trainer.sample_batch(data, step).unwrap();
+        let per_item = 2 * batch.per_item;
+        for (item, queries) in batch.queries.chunks_exact(per_item).enumerate() {
             let goal = (batch.goals[2 * item], batch.goals[2 * item + 1]);
+            let obstacles = &batch.obstacles[item * 256..(item + 1) * 256];
             let sample = data
                 .samples
                 .iter()
@@ -445,28 +471,17 @@ fn detour_sampling_draws_cells_behind_obstacles() {
                             .obstacles()
                             .iter()
                             .map(|&o| o as u8 as f32)
-                            .eq(batch.obstacles[item * 256..(item + 1) * 256]
-                                .iter()
-                                .copied())
+                            .eq(obstacles.iter().copied())
                 })
                 .expect("the item's sample");
-            for q in queries.chunks_exact(2) {
-                let (r, c) = (q[0] as usize, q[1] as usize);
-                let d = envfield_mazes::decode_target(sample.target[r * 16 + c]);
-                let (dr, dc) = (
-                    r.abs_diff(sample.goal.row) as f32,
-                    c.abs_diff(sample.goal.col) as f32,
-                );
-                let octile = dr.max(dc) + (2f32.sqrt() - 1.0) * dr.min(dc);
-                assert!(
-                    d.is_finite() && d > octile + 0.5,
-                    "({r}, {c}): {d} vs {octile}"
-                );
-                drawn += 1;
-            }
+            out.extend(
+                queries
+                    .chunks_exact(2)
+                    .map(|q| (sample, q[0] as usize, q[1] as usize)),
+            );
         }
     }
-    assert_eq!(drawn, 5 * 6 * 40);
+    out
 }
 
 /// With `far_fraction` 1 every query lies at least half the maze's largest reachable distance
@@ -490,41 +505,19 @@ fn far_sampling_draws_cells_far_from_the_goal() {
         Err(NetsError::InvalidConfig(_))
     ));
     let trainer = Trainer::new(net(), cfg).unwrap();
-    let mut drawn = 0;
-    for step in 0..5 {
-        let (batch, _) = trainer.sample_batch(&data, step).unwrap();
-        for (item, queries) in batch.queries.chunks_exact(80).enumerate() {
-            let goal = (batch.goals[2 * item], batch.goals[2 * item + 1]);
-            let obstacles = &batch.obstacles[item * 256..(item + 1) * 256];
-            let sample = data
-                .samples
-                .iter()
-                .find(|s| {
-                    (s.goal.row as f32, s.goal.col as f32) == goal
-                        && s.grid
-                            .obstacles()
-                            .iter()
-                            .map(|&o| o as u8 as f32)
-                            .eq(obstacles.iter().copied())
-                })
-                .expect("the item's sample");
-            let distance: Vec<f32> = sample
-                .target
-                .iter()
-                .map(|&t| envfield_mazes::decode_target(t))
-                .collect();
-            let max = distance
-                .iter()
-                .filter(|d| d.is_finite())
-                .fold(0f32, |m, &d| m.max(d));
-            for q in queries.chunks_exact(2) {
-                let d = distance[q[0] as usize * 16 + q[1] as usize];
-                assert!(d.is_finite() && d >= 0.5 * max, "{d} of at most {max}");
-                drawn += 1;
-            }
-        }
+    let queries = sampled_queries(&trainer, &data, 5);
+    assert_eq!(queries.len(), 5 * 6 * 40);
+    for (sample, r, c) in queries {
+        let distance = |t: &f32| envfield_mazes::decode_target(*t);
+        let max = sample
+            .target
+            .iter()
+            .map(distance)
+            .filter(|d| d.is_finite())
+            .fold(0f32, f32::max);
+        let d = distance(&sample.target[r * 16 + c]);
+        assert!(d.is_finite() && d >= 0.5 * max, "{d} of at most {max}");
     }
-    assert_eq!(drawn, 5 * 6 * 40);
 }
 
 /// With a descent weight, queries come in groups of nine: an anchor, then each neighbour in
