@@ -108,6 +108,11 @@ struct Args {
     /// resumed run.
     #[arg(long)]
     far_fraction: Option<f64>,
+    /// Fraction of anchor queries drawn from the cells where the network's descent move is
+    /// wrong at this step (one whole-field prediction per sampled maze and step; context and
+    /// hyper networks). Also applies to a resumed run.
+    #[arg(long)]
+    hard_fraction: Option<f64>,
     /// Weight of the descent loss (0: off): queries in groups of a cell and its 8 neighbours;
     /// each move other than the best ones should score below the best by --descent-margin
     /// (hinge). Needs --queries divisible by 9. Also applies to a resumed run.
@@ -260,6 +265,9 @@ fn main() -> Result<()> {
             if let Some(f) = args.far_fraction {
                 t.set_far_fraction(f)?;
             }
+            if let Some(f) = args.hard_fraction {
+                t.set_hard_fraction(f)?;
+            }
             if let Some(w) = args.descent_weight {
                 t.set_descent(w, args.descent_margin, rule)?;
             }
@@ -339,6 +347,7 @@ fn main() -> Result<()> {
                 neighbour_weight: args.neighbour_weight.unwrap_or(0.0),
                 detour_fraction: args.detour_fraction.unwrap_or(0.0),
                 far_fraction: args.far_fraction.unwrap_or(0.0),
+                hard_fraction: args.hard_fraction.unwrap_or(0.0),
                 descent_weight: args.descent_weight.unwrap_or(0.0),
                 descent_margin: args.descent_margin,
                 descent_rule: rule,

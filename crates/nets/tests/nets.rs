@@ -1,13 +1,14 @@
 //! Behaviour of the networks: fitting, saving and loading, bad files, input gradients,
 //! resuming training.
 
-use envfield_grid::{Cell2, FieldModel, Grid2, MoveRule, Point2};
+use envfield_eikonal::dijkstra2;
+use envfield_grid::{Cell2, FieldModel, Grid2, MoveRule, Neighbourhood2, Point2};
 use envfield_mazes::{Dataset, DatasetConfig, GeneratorKind, MazeGenerator, Sample, TargetKind};
 use envfield_nets::{
     Activation, Batch, ContextConfig, ConvSpec, FieldNet, GoalConfig, HyperConfig, MlpConfig,
     ModelConfig, NetsError, PlainConfig, PropagationConfig, TargetEncoding, TrainConfig, Trainer,
 };
-use envfield_plan::{FieldDescent, Planner};
+use envfield_plan::{descend, FieldDescent, Planner};
 
 fn tmp(name: &str) -> std::path::PathBuf {
     let dir = std::env::temp_dir().join(format!("envfield-nets-{}", std::process::id()));
@@ -517,6 +518,66 @@ fn far_sampling_draws_cells_far_from_the_goal() {
             .fold(0f32, f32::max);
         let d = distance(&sample.target[r * 16 + c]);
         assert!(d.is_finite() && d >= 0.5 * max, "{d} of at most {max}");
+    }
+}
+
+/// With `hard_fraction` 1 every query is a reachable cell where descent on the network's
+/// current field (as the planner walks it) steps to a move that is not a shortest move, judged
+/// by Dijkstra here; a network that does not read the grid or a fraction out of range is a
+/// config error.
+#[test]
+fn hard_sampling_draws_cells_where_the_move_is_wrong() {
+    let data = dataset(16, 6, 2, 9);
+    let cfg = TrainConfig {
+        batch_items: 6,
+        queries_per_item: 40,
+        hard_fraction: 1.0,
+        ..TrainConfig::default()
+    };
+    let net = || FieldNet::new(ModelConfig::Context(small_context()), 3).unwrap();
+    let bad = TrainConfig {
+        hard_fraction: 1.5,
+        ..cfg.clone()
+    };
+    assert!(matches!(
+        Trainer::new(net(), bad),
+        Err(NetsError::InvalidConfig(_))
+    ));
+    let plain = FieldNet::new(
+        ModelConfig::Plain(PlainConfig {
+            extent: vec![16, 16],
+            goal: vec![0, 0],
+            mlp: MlpConfig::default(),
+            encoding: Default::default(),
+        }),
+        0,
+    )
+    .unwrap();
+    assert!(matches!(
+        Trainer::new(plain, cfg.clone()),
+        Err(NetsError::InvalidConfig(_))
+    ));
+    let trainer = Trainer::new(net(), cfg).unwrap();
+    let queries = sampled_queries(&trainer, &data, 3);
+    assert_eq!(queries.len(), 3 * 6 * 40);
+    let nb = Neighbourhood2::Eight(MoveRule::Strict);
+    for (sample, r, c) in queries {
+        let cell = Cell2::new(r, c);
+        let truth = dijkstra2(&sample.grid, &[sample.goal], nb, 2f32.sqrt()).unwrap();
+        let dist = |c: Cell2| truth.get(c).unwrap_or(f32::INFINITY);
+        assert!(dist(cell).is_finite() && cell != sample.goal, "({r}, {c})");
+        let field = trainer.net().field(&sample.grid, sample.goal).unwrap();
+        let walk = descend(&sample.grid, &field, MoveRule::Strict, cell, sample.goal, 1);
+        let best = sample
+            .grid
+            .neighbours(cell, nb)
+            .map(|(n, _)| dist(n))
+            .fold(f32::INFINITY, f32::min);
+        let taken = walk.path.get(1).map_or(f32::INFINITY, |&n| dist(n));
+        assert!(
+            taken > best + 1e-3,
+            "({r}, {c}): move to {taken}, best {best}"
+        );
     }
 }
 

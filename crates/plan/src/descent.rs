@@ -25,6 +25,20 @@ impl<M: FieldModel> FieldDescent<M> {
     }
 }
 
+/// The move descent takes from `cell`: the neighbour under `rule` of least finite value in
+/// `field`, ties to the first direction in [`envfield_grid::DIRECTIONS_8`] order; `None`
+/// when every neighbour is infinite (or `cell` is an obstacle).
+pub fn descent_move(grid: &Grid2, field: &Field2, rule: MoveRule, cell: Cell2) -> Option<Cell2> {
+    let mut best: Option<(Cell2, f32)> = None;
+    for (next, _) in grid.neighbours(cell, Neighbourhood2::Eight(rule)) {
+        let v = field.get(next).unwrap_or(f32::INFINITY);
+        if v.is_finite() && best.is_none_or(|(_, b)| v < b) {
+            best = Some((next, v));
+        }
+    }
+    best.map(|(next, _)| next)
+}
+
 /// Walks down `field` from `start` (see [`FieldDescent`]).
 pub fn descend(
     grid: &Grid2,
@@ -39,15 +53,8 @@ pub fn descend(
     visited.insert(start);
     let mut here = start;
     while here != goal && path.len() <= max_steps {
-        let mut best: Option<(Cell2, f32)> = None;
-        for (next, _) in grid.neighbours(here, Neighbourhood2::Eight(rule)) {
-            let v = field.get(next).unwrap_or(f32::INFINITY);
-            if v.is_finite() && best.is_none_or(|(_, b)| v < b) {
-                best = Some((next, v));
-            }
-        }
-        match best {
-            Some((next, _)) if visited.insert(next) => {
+        match descent_move(grid, field, rule, here) {
+            Some(next) if visited.insert(next) => {
                 path.push(next);
                 here = next;
             }

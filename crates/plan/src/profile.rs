@@ -1,7 +1,7 @@
 //! Where field descent goes wrong: its decisions and outcomes from every reachable cell,
 //! grouped by the cell's true distance to the goal.
 
-use crate::{descend, PlanError, Result};
+use crate::{descend, descent_move, PlanError, Result};
 use envfield_eikonal::{bfs2, dijkstra2};
 use envfield_grid::{Cell2, Field2, Grid2, MoveRule, Neighbourhood2};
 use serde::{Deserialize, Serialize};
@@ -82,15 +82,8 @@ impl DecisionProfile {
                 .iter()
                 .map(|&(n, _)| dist(n))
                 .fold(f32::INFINITY, f32::min);
-            // Descent's choice: the first move of least finite field value.
-            let mut chosen: Option<(Cell2, f32)> = None;
-            for &(n, _) in &moves {
-                let v = field.get(n).unwrap_or(f32::INFINITY);
-                if v.is_finite() && chosen.is_none_or(|(_, b)| v < b) {
-                    chosen = Some((n, v));
-                }
-            }
-            let wrong = chosen.is_none_or(|(n, _)| dist(n) > best + 1e-4 * best.max(1.0));
+            let chosen = descent_move(grid, field, rule, cell);
+            let wrong = chosen.is_none_or(|n| dist(n) > best + 1e-4 * best.max(1.0));
             let budget = 2 * (steps.get(cell).unwrap_or(0.0) as usize + 1);
             let failing = !descend(grid, field, rule, cell, goal, budget).success;
             let k = (d / self.width) as usize;
