@@ -68,7 +68,9 @@ struct Args {
     #[arg(long, default_value = "out/field.safetensors")]
     out: PathBuf,
     /// Resume from this checkpoint (its model and training configs win over the flags,
-    /// except --steps).
+    /// except --steps and the flags that say they apply to a resumed run). The data flags
+    /// (--generator, --size, --mazes, --goals-per-maze, --target, --seed) are not stored in
+    /// the checkpoint: pass the ones of the run it continues.
     #[arg(long)]
     resume: Option<PathBuf>,
     /// Held-out mazes for the navigation check at the end.
