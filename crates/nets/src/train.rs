@@ -6,9 +6,9 @@ use crate::params::{ema_name, AdamW, TensorFile, META_STEP};
 use crate::{NetsError, Result};
 use candle_core::{Device, Tensor};
 use envfield_grid::synth::SplitMix64;
-use envfield_grid::{Cell2, Grid2, MoveRule, Neighbourhood2, DIRECTIONS_8};
+use envfield_grid::{Cell2, Grid2, MoveRule, DIRECTIONS_8};
 use envfield_mazes::{Dataset, Sample};
-use envfield_plan::descent_move;
+use envfield_plan::is_wrong_move;
 use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
 use std::path::Path;
@@ -661,15 +661,7 @@ impl Trainer {
         Ok(s.grid
             .free_cells()
             .filter(|&c| c != s.goal && distance(c).is_finite())
-            .filter(|&c| {
-                let best = s
-                    .grid
-                    .neighbours(c, Neighbourhood2::Eight(rule))
-                    .map(|(n, _)| distance(n))
-                    .fold(f32::INFINITY, f32::min);
-                descent_move(&s.grid, &field, rule, c)
-                    .is_none_or(|n| distance(n) > best + 1e-4 * best.max(1.0))
-            })
+            .filter(|&c| is_wrong_move(&s.grid, &field, rule, c, distance))
             .map(|c| c.row * cols + c.col)
             .collect())
     }

@@ -39,6 +39,22 @@ pub fn descent_move(grid: &Grid2, field: &Field2, rule: MoveRule, cell: Cell2) -
     best.map(|(next, _)| next)
 }
 
+/// Whether descent's move from `cell` (see [`descent_move`]) is wrong: its true distance, by
+/// `distance`, exceeds the best move's (up to a relative 1e-4), or there is no move at all.
+pub fn is_wrong_move(
+    grid: &Grid2,
+    field: &Field2,
+    rule: MoveRule,
+    cell: Cell2,
+    distance: impl Fn(Cell2) -> f32,
+) -> bool {
+    let best = grid
+        .neighbours(cell, Neighbourhood2::Eight(rule))
+        .map(|(n, _)| distance(n))
+        .fold(f32::INFINITY, f32::min);
+    descent_move(grid, field, rule, cell).is_none_or(|n| distance(n) > best + 1e-4 * best.max(1.0))
+}
+
 /// Walks down `field` from `start` (see [`FieldDescent`]).
 pub fn descend(
     grid: &Grid2,

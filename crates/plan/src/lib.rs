@@ -34,7 +34,7 @@ mod planner;
 mod profile;
 
 pub use astar::AStar;
-pub use descent::{descend, descent_move, FieldDescent};
+pub use descent::{descend, descent_move, is_wrong_move, FieldDescent};
 pub use error::{PlanError, Result};
 pub use gradient::{gradient_descent, ContinuousPath, GradientDescentConfig};
 pub use harness::{

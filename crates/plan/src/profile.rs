@@ -1,7 +1,7 @@
 //! Where field descent goes wrong: its decisions and outcomes from every reachable cell,
 //! grouped by the cell's true distance to the goal.
 
-use crate::{descend, descent_move, PlanError, Result};
+use crate::{descend, is_wrong_move, PlanError, Result};
 use envfield_eikonal::{bfs2, dijkstra2};
 use envfield_grid::{Cell2, Field2, Grid2, MoveRule, Neighbourhood2};
 use serde::{Deserialize, Serialize};
@@ -77,13 +77,7 @@ impl DecisionProfile {
             if !d.is_finite() || cell == goal {
                 continue;
             }
-            let moves: Vec<(Cell2, f32)> = grid.neighbours(cell, nb).collect();
-            let best = moves
-                .iter()
-                .map(|&(n, _)| dist(n))
-                .fold(f32::INFINITY, f32::min);
-            let chosen = descent_move(grid, field, rule, cell);
-            let wrong = chosen.is_none_or(|n| dist(n) > best + 1e-4 * best.max(1.0));
+            let wrong = is_wrong_move(grid, field, rule, cell, dist);
             let budget = 2 * (steps.get(cell).unwrap_or(0.0) as usize + 1);
             let failing = !descend(grid, field, rule, cell, goal, budget).success;
             let k = (d / self.width) as usize;
