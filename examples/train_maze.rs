@@ -254,9 +254,27 @@ fn main() -> Result<()> {
         validation.push(held_out);
     }
     let first = &datasets[0].samples[0];
+    // The data flags, recorded in every checkpoint: a resumed run must be given the same ones.
+    let data = format!(
+        "generator {}, sizes {}, {} mazes x {} goals per size, target {}, seed {}",
+        args.generator, args.size, args.mazes, args.goals_per_maze, args.target, args.seed
+    );
     let mut trainer = match &args.resume {
         Some(path) => {
             let mut t = Trainer::resume(path)?;
+            match t.data_description() {
+                Some(before) if before != data => bail!(
+                    "{} was trained on data ({before}) other than these flags give ({data}): \
+                     pass the data flags of the run it continues",
+                    path.display()
+                ),
+                Some(_) => {}
+                None => eprintln!(
+                    "warning: {} does not record its training data (an older checkpoint); \
+                     going on with {data}",
+                    path.display()
+                ),
+            }
             t.set_steps(args.steps);
             if let Some(w) = args.neighbour_weight {
                 t.set_neighbour_weight(w)?;
@@ -360,6 +378,7 @@ fn main() -> Result<()> {
             Trainer::new(FieldNet::new(model, args.seed)?, train)?
         }
     };
+    trainer.set_data_description(data);
     let net_info = format!(
         "{} network, {} parameters, sizes {:?}, {} samples per size",
         trainer.net().config().arch(),

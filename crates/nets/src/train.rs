@@ -15,6 +15,7 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 
 const META_TRAIN: &str = "envfield.train";
+const META_DATA: &str = "envfield.data";
 
 /// Queries per group of the descent loss: an anchor cell and its 8 neighbours.
 const GROUP: usize = 9;
@@ -243,6 +244,8 @@ pub struct Trainer {
     /// The moving average of the weights (see [`TrainConfig::ema_decay`]), one tensor per
     /// parameter in the store's order.
     ema: Option<Vec<Tensor>>,
+    /// What the caller says the training data is (see [`Trainer::set_data_description`]).
+    data: Option<String>,
 }
 
 impl Trainer {
@@ -269,6 +272,7 @@ impl Trainer {
             optimiser,
             config,
             ema,
+            data: None,
         })
     }
 
@@ -316,7 +320,20 @@ impl Trainer {
         let mut trainer = Self::new(net, config)?;
         trainer.optimiser.set_moments(m, v, step);
         trainer.ema = ema;
+        trainer.data = file.metadata.get(META_DATA).cloned();
         Ok(trainer)
+    }
+
+    /// Records what the training data is (the datasets are the caller's, so a checkpoint
+    /// cannot hold them): checkpoints carry the text, and [`Trainer::data_description`] on a
+    /// resumed trainer gives it back, so a caller can refuse to go on with other data.
+    pub fn set_data_description(&mut self, description: impl Into<String>) {
+        self.data = Some(description.into());
+    }
+
+    /// The data description set on this trainer or read from its checkpoint, if any.
+    pub fn data_description(&self) -> Option<&str> {
+        self.data.as_deref()
     }
 
     /// Steps done so far.
@@ -460,6 +477,9 @@ impl Trainer {
             NetsError::InvalidConfig(format!("cannot serialise the training config: {e}"))
         })?;
         meta.insert(META_TRAIN.to_string(), train);
+        if let Some(data) = &self.data {
+            meta.insert(META_DATA.to_string(), data.clone());
+        }
         self.net.write_file(path.as_ref(), extra, meta)
     }
 

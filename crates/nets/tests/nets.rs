@@ -303,6 +303,7 @@ fn training_resumes_exactly_from_a_checkpoint() {
 
     let ckpt = tmp("resume.ckpt");
     let mut first = make();
+    first.set_data_description("8x8 gridworld, 6 mazes x 2 goals, seed 9");
     first
         .run(std::slice::from_ref(&data), None, Some(&ckpt), |p| {
             p.step < 3
@@ -311,6 +312,11 @@ fn training_resumes_exactly_from_a_checkpoint() {
     assert_eq!(first.step(), 3);
     let mut resumed = Trainer::resume(&ckpt).unwrap();
     assert_eq!(resumed.step(), 3);
+    assert_eq!(
+        resumed.data_description(),
+        Some("8x8 gridworld, 6 mazes x 2 goals, seed 9")
+    );
+    assert_eq!(straight.data_description(), None);
     resumed
         .run(std::slice::from_ref(&data), None, Some(&ckpt), |_| true)
         .unwrap();
