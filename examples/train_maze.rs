@@ -69,8 +69,8 @@ struct Args {
     out: PathBuf,
     /// Resume from this checkpoint (its model and training configs win over the flags,
     /// except --steps and the flags that say they apply to a resumed run). The data flags
-    /// (--generator, --size, --mazes, --goals-per-maze, --target, --seed) are not stored in
-    /// the checkpoint: pass the ones of the run it continues.
+    /// (--generator, --size, --mazes, --goals-per-maze, --target, --seed) must be the ones of
+    /// the run it continues: the checkpoint records them and other ones are an error.
     #[arg(long)]
     resume: Option<PathBuf>,
     /// Held-out mazes for the navigation check at the end.
