@@ -218,6 +218,33 @@ fn main() -> Result<()> {
     if single && sizes.len() > 1 {
         bail!("--arch {} learns one maze: give one --size", args.arch);
     }
+    // The data flags, recorded in every checkpoint: a resumed run must be given the same ones,
+    // checked before the datasets are generated.
+    let data = format!(
+        "generator {}, sizes {}, {} mazes x {} goals per size, target {}, seed {}",
+        args.generator, args.size, args.mazes, args.goals_per_maze, args.target, args.seed
+    );
+    let resumed = match &args.resume {
+        Some(path) => {
+            let t = Trainer::resume(path)?;
+            match t.data_description() {
+                Some(before) if before != data => bail!(
+                    "{} was trained on data ({before}) other than these flags give ({data}): \
+                     pass the data flags of the run it continues",
+                    path.display()
+                ),
+                Some(_) => {}
+                None => eprintln!(
+                    "warning: {} does not record its training data (an older checkpoint); \
+                     going on with {data}",
+                    path.display()
+                ),
+            }
+            eprintln!("resumed {} at step {}", path.display(), t.step());
+            Some(t)
+        }
+        None => None,
+    };
     // Training data: mazes 0..mazes of the seed; the held-out mazes use another seed.
     let mut datasets = Vec::new();
     let mut validation = Vec::new();
@@ -254,27 +281,8 @@ fn main() -> Result<()> {
         validation.push(held_out);
     }
     let first = &datasets[0].samples[0];
-    // The data flags, recorded in every checkpoint: a resumed run must be given the same ones.
-    let data = format!(
-        "generator {}, sizes {}, {} mazes x {} goals per size, target {}, seed {}",
-        args.generator, args.size, args.mazes, args.goals_per_maze, args.target, args.seed
-    );
-    let mut trainer = match &args.resume {
-        Some(path) => {
-            let mut t = Trainer::resume(path)?;
-            match t.data_description() {
-                Some(before) if before != data => bail!(
-                    "{} was trained on data ({before}) other than these flags give ({data}): \
-                     pass the data flags of the run it continues",
-                    path.display()
-                ),
-                Some(_) => {}
-                None => eprintln!(
-                    "warning: {} does not record its training data (an older checkpoint); \
-                     going on with {data}",
-                    path.display()
-                ),
-            }
+    let mut trainer = match resumed {
+        Some(mut t) => {
             t.set_steps(args.steps);
             if let Some(w) = args.neighbour_weight {
                 t.set_neighbour_weight(w)?;
@@ -297,7 +305,6 @@ fn main() -> Result<()> {
             if let Some(decay) = args.ema {
                 t.set_ema_decay(decay)?;
             }
-            eprintln!("resumed {} at step {}", path.display(), t.step());
             t
         }
         None => {
