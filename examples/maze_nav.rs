@@ -20,7 +20,9 @@ use envfield::grid::{
 };
 use envfield::mazes::{GeneratorKind, MazeGenerator};
 use envfield::nets::{FieldNet, Vin};
-use envfield::plan::{evaluate, AStar, DecisionProfile, EvalConfig, FieldDescent, Planner, Report};
+use envfield::plan::{
+    evaluate, AStar, DecisionProfile, EvalConfig, FieldDescent, Planner, RelayDescent, Report,
+};
 use std::path::{Path, PathBuf};
 
 #[global_allocator]
@@ -60,11 +62,16 @@ struct Args {
     /// Seed of generated mazes and random pairs.
     #[arg(long, default_value_t = 0)]
     seed: u64,
-    /// Planners, comma-separated: field (the learned context-aligned field, descent), hyper
-    /// (the hypernetwork field), vin (the VIN baseline, one network pass per step), fmm
+    /// Planners, comma-separated: field (the learned context-aligned field, descent), relay
+    /// (the same field; a descent that fails is split at a relay cell: see --relays), hyper (the hypernetwork
+    /// field), vin (the VIN baseline, one network pass per step), fmm
     /// (fast-marching field descent), graph (exact graph-distance field descent), astar.
-    #[arg(long, default_value = "field,vin,astar,fmm")]
+    #[arg(long, default_value = "field,relay,vin,astar,fmm")]
     planner: String,
+    /// For `relay`: how many times a failing descent may be split in two at the cell where
+    /// the start's and the goal's predicted fields meet (each split, one more prediction).
+    #[arg(long, default_value_t = 3)]
+    relays: usize,
     /// Weights for `field` or `hyper` (default: models/context.safetensors or
     /// models/hyper.safetensors; a file named <arch>_<size>.safetensors there wins for mazes of
     /// that size). VIN always loads models/vin_<size>.safetensors unless this names a VIN file.
@@ -100,6 +107,7 @@ struct Args {
 /// The planners maze_nav knows, with their field models kept for pictures.
 enum Choice {
     Field(FieldDescent<Box<dyn FieldModel + Send + Sync>>),
+    Relay(RelayDescent<Box<dyn FieldModel + Send + Sync>>),
     AStar(AStar),
     Vin(Box<Vin>),
 }
@@ -133,13 +141,14 @@ impl Choice {
         size: usize,
         model: Option<&Path>,
         views: usize,
+        relays: usize,
     ) -> Result<Self> {
         let model: Box<dyn FieldModel + Send + Sync> = match name {
             "fmm" => Box::new(FastMarching::default()),
             "graph" => Box::new(GraphDistance::new(Neighbourhood2::Eight(rule))),
             "astar" => return Ok(Choice::AStar(AStar { rule })),
-            "field" | "hyper" => {
-                let arch = if name == "field" { "context" } else { "hyper" };
+            "field" | "relay" | "hyper" => {
+                let arch = if name == "hyper" { "hyper" } else { "context" };
                 let file = model_file(arch, size, model)?;
                 // Several comma-separated files: an ensemble, the mean of their fields.
                 let mut nets = file
@@ -151,11 +160,15 @@ impl Choice {
                     1 => Box::new(nets.remove(0)),
                     _ => Box::new(Ensemble::new(nets)?),
                 };
-                if views == 1 {
+                let learned = if views == 1 {
                     learned
                 } else {
                     Box::new(Symmetric::new(learned, views)?)
+                };
+                if name == "relay" {
+                    return Ok(Choice::Relay(RelayDescent::new(learned, rule, relays)));
                 }
+                learned
             }
             "vin" => {
                 let file = match model.filter(|p| Vin::load(p).is_ok()) {
@@ -167,7 +180,7 @@ impl Choice {
                 return Ok(Choice::Vin(Box::new(vin)));
             }
             other => {
-                bail!("unknown planner {other:?} (expected field, hyper, vin, fmm, graph or astar)")
+                bail!("unknown planner {other:?} (expected field, relay, hyper, vin, fmm, graph or astar)")
             }
         };
         Ok(Choice::Field(FieldDescent::new(model, rule)))
@@ -176,6 +189,7 @@ impl Choice {
     fn planner(&self) -> &dyn Planner {
         match self {
             Choice::Field(p) => p,
+            Choice::Relay(p) => p,
             Choice::AStar(p) => p,
             Choice::Vin(p) => p.as_ref(),
         }
@@ -184,6 +198,7 @@ impl Choice {
     fn field_model(&self) -> Option<&dyn FieldModel> {
         match self {
             Choice::Field(p) => Some(p.model.as_ref()),
+            Choice::Relay(p) => Some(p.model.as_ref()),
             Choice::AStar(_) | Choice::Vin(_) => None,
         }
     }
@@ -310,7 +325,16 @@ fn main() -> Result<()> {
             .map_or(0, |m| m.grid.rows().max(m.grid.cols()));
         let choices: Vec<Choice> = names
             .iter()
-            .map(|n| Choice::parse(n, rule, size, args.model.as_deref(), args.views))
+            .map(|n| {
+                Choice::parse(
+                    n,
+                    rule,
+                    size,
+                    args.model.as_deref(),
+                    args.views,
+                    args.relays,
+                )
+            })
             .collect::<Result<_>>()?;
         for choice in &choices {
             let bar = indicatif::ProgressBar::new(0).with_message(format!(
@@ -365,12 +389,12 @@ fn main() -> Result<()> {
             args.pairs, args.seed
         );
         println!(
-            "{:<22} {:<8} {:>6} {:>7} {:>10} {:>11} {:>11}",
+            "{:<22} {:<14} {:>6} {:>7} {:>10} {:>11} {:>11}",
             "mazes", "planner", "mazes", "pairs", "success %", "path ratio", "ms/path"
         );
         for (label, s) in &lines {
             println!(
-                "{:<22} {:<8} {:>6} {:>7} {:>10.2} {:>11.4} {:>11.4}",
+                "{:<22} {:<14} {:>6} {:>7} {:>10.2} {:>11.4} {:>11.4}",
                 label, s.planner, s.mazes, s.pairs, s.success_rate, s.path_ratio, s.ms_per_path
             );
         }

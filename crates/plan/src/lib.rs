@@ -4,6 +4,8 @@
 //! - [`FieldDescent`]: predict the whole field once with any
 //!   [`FieldModel`](envfield_grid::FieldModel), then step to the best neighbour under a
 //!   [`MoveRule`](envfield_grid::MoveRule) (paper section 4.1).
+//! - [`RelayDescent`]: descent that splits long paths at a relay cell found from the start's
+//!   and the goal's fields, so no leg relies on a field far from its goal.
 //! - [`gradient_descent`]: fixed-length steps against the gradient of a continuous field
 //!   (paper Fig. 3c).
 //! - [`AStar`]: octile A* under either move rule.
@@ -32,6 +34,7 @@ mod gradient;
 mod harness;
 mod planner;
 mod profile;
+mod relay;
 
 pub use astar::AStar;
 pub use descent::{descend, descent_move, is_wrong_move, FieldDescent};
@@ -42,3 +45,4 @@ pub use harness::{
 };
 pub use planner::{path_length, PlanOutcome, Planner};
 pub use profile::{Band, DecisionProfile};
+pub use relay::{relay_cell, remove_loops, RelayDescent};
