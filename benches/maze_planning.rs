@@ -2,7 +2,8 @@
 //! Each group holds the exact oracles (fast-marching and graph-distance field descent: the
 //! whole field computed, then the walk), A*, and, when the shipped models are in `models/`,
 //! the learned field (the whole field predicted once, then descent; all inference included),
-//! the hypernetwork, and VIN (one network pass per step, VIN's own protocol). Pairs and rule
+//! the same field with relays (`RelayDescent`: a failing walk is planned again through a relay
+//! cell, one more prediction per split), the hypernetwork, and VIN (one network pass per step, VIN's own protocol). Pairs and rule
 //! are `vin` here, as in the maze benchmark.
 //!
 //! `cargo bench --bench maze_planning`
@@ -15,7 +16,7 @@ use envfield::eikonal::{FastMarching, GraphDistance};
 use envfield::grid::{MoveRule, Neighbourhood2};
 use envfield::mazes::{evaluation_pairs, GeneratorKind, MazeGenerator};
 use envfield::nets::{FieldNet, Vin};
-use envfield::plan::{AStar, FieldDescent, Planner};
+use envfield::plan::{AStar, FieldDescent, Planner, RelayDescent};
 use std::hint::black_box;
 use std::path::Path;
 
@@ -39,14 +40,21 @@ fn bench_planners(c: &mut Criterion) {
             .or_else(|| model(&format!("{arch}.safetensors")))
             .map(|p| FieldDescent::new(FieldNet::load(p).expect("shipped model loads"), rule))
     };
+    let relay = |size: usize| {
+        model(&format!("context_{size}.safetensors"))
+            .or_else(|| model("context.safetensors"))
+            .map(|p| RelayDescent::new(FieldNet::load(p).expect("shipped model loads"), rule, 2))
+    };
     for size in [8usize, 16, 28, 64] {
         let field = load("context", size);
+        let relayed = relay(size);
         let hyper = load("hyper", size);
         let vin =
             model(&format!("vin_{size}.safetensors")).map(|p| Vin::load(p).expect("vin loads"));
         let mut planners: Vec<&dyn Planner> = vec![&fmm, &graph, &astar];
         if size <= 28 {
             planners.extend(field.as_ref().map(|p| p as &dyn Planner));
+            planners.extend(relayed.as_ref().map(|p| p as &dyn Planner));
             planners.extend(hyper.as_ref().map(|p| p as &dyn Planner));
         }
         planners.extend(vin.as_ref().map(|p| p as &dyn Planner));

@@ -70,8 +70,12 @@ struct Args {
     planner: String,
     /// For `relay`: how many times a failing descent may be split in two at the cell where
     /// the start's and the goal's predicted fields meet (each split, one more prediction).
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = 2)]
     relays: usize,
+    /// For `relay`: how many relay cells, best first, a failing descent tries with plain walks
+    /// (no prediction) before the best one's legs are split again (default: every cell).
+    #[arg(long)]
+    candidates: Option<usize>,
     /// Weights for `field` or `hyper` (default: models/context.safetensors or
     /// models/hyper.safetensors; a file named <arch>_<size>.safetensors there wins for mazes of
     /// that size). VIN always loads models/vin_<size>.safetensors unless this names a VIN file.
@@ -135,14 +139,8 @@ fn model_file(arch: &str, size: usize, explicit: Option<&Path>) -> Result<PathBu
 }
 
 impl Choice {
-    fn parse(
-        name: &str,
-        rule: MoveRule,
-        size: usize,
-        model: Option<&Path>,
-        views: usize,
-        relays: usize,
-    ) -> Result<Self> {
+    fn parse(name: &str, rule: MoveRule, size: usize, args: &Args) -> Result<Self> {
+        let (model, views) = (args.model.as_deref(), args.views);
         let model: Box<dyn FieldModel + Send + Sync> = match name {
             "fmm" => Box::new(FastMarching::default()),
             "graph" => Box::new(GraphDistance::new(Neighbourhood2::Eight(rule))),
@@ -166,7 +164,9 @@ impl Choice {
                     Box::new(Symmetric::new(learned, views)?)
                 };
                 if name == "relay" {
-                    return Ok(Choice::Relay(RelayDescent::new(learned, rule, relays)));
+                    let mut relay = RelayDescent::new(learned, rule, args.relays);
+                    relay.candidates = args.candidates.unwrap_or(relay.candidates);
+                    return Ok(Choice::Relay(relay));
                 }
                 learned
             }
@@ -325,16 +325,7 @@ fn main() -> Result<()> {
             .map_or(0, |m| m.grid.rows().max(m.grid.cols()));
         let choices: Vec<Choice> = names
             .iter()
-            .map(|n| {
-                Choice::parse(
-                    n,
-                    rule,
-                    size,
-                    args.model.as_deref(),
-                    args.views,
-                    args.relays,
-                )
-            })
+            .map(|n| Choice::parse(n, rule, size, &args))
             .collect::<Result<_>>()?;
         for choice in &choices {
             let bar = indicatif::ProgressBar::new(0).with_message(format!(

@@ -45,4 +45,4 @@ pub use harness::{
 };
 pub use planner::{path_length, PlanOutcome, Planner};
 pub use profile::{Band, DecisionProfile};
-pub use relay::{relay_cell, remove_loops, RelayDescent};
+pub use relay::{relay_cells, remove_loops, RelayDescent};

@@ -4,8 +4,8 @@ use crate::{PlanError, PlanOutcome, Planner, Result};
 use envfield_grid::{Cell2, Field2, FieldModel, Grid2, MoveRule};
 use std::collections::HashMap;
 
-/// Field descent that, when the walk fails, splits the path at a relay cell so that no leg
-/// relies on a field far from its goal.
+/// Field descent that, when the walk fails, plans through a relay cell so that no leg relies
+/// on a field far from its goal.
 ///
 /// A learned field ranks moves well near its goal and less well far from it (the decision
 /// profile of a network trained on mazes shows the share of failing cells rising with the
@@ -13,23 +13,26 @@ use std::collections::HashMap;
 /// the field towards the *start* is also the distance *from* the start, and the two fields
 /// together locate the middle of a shortest path: on one, `f_start + f_goal` is the path's
 /// length, off it larger, so the cell minimising `max(f_start, f_goal)` is the middle of a
-/// shortest path when the fields are exact. This planner:
+/// shortest path when the fields are exact. The walks are planned on the predicted fields
+/// before the agent moves, so the planner knows whether one arrives (it ends on its goal, or
+/// stops in a loop or a dead end). This planner:
 ///
 /// 1. predicts the goal's field and walks down it from the start like
-///    [`FieldDescent`](crate::FieldDescent); when the walk reaches the goal, that is the plan
-///    (the walk is planned on the predicted field before the agent moves, so the planner
-///    knows whether it arrives: it ends on the goal or stops in a loop or a dead end);
-/// 2. otherwise it predicts the start's field too and picks the relay cell `r` minimising
-///    `max(f_start, f_goal)` over the cells where both are finite (ties to the smaller sum,
-///    then the first cell in row-major order);
-/// 3. plans from `r` to the start on the start's field and walks that path backwards, then
-///    from `r` to the goal on the goal's field, each leg about half the path and planned the
-///    same way (a failing leg is split again, up to [`depth`](Self::depth) levels);
-/// 4. cuts every loop out of the joined path (it stays a walk of legal moves).
+///    [`FieldDescent`](crate::FieldDescent); a walk that reaches the goal is the plan;
+/// 2. otherwise predicts the start's field too and walks down it from the goal; if that walk
+///    reaches the start, the plan is that walk backwards;
+/// 3. otherwise ranks relay cells `r` by `max(f_start, f_goal)` ([`relay_cells`]) and takes
+///    the first of the best [`candidates`](Self::candidates) from which both walks arrive:
+///    down the start's field to the start (walked backwards) and down the goal's field to the
+///    goal; these walks need no further prediction;
+/// 4. when none arrives, plans the two legs of the best relay cell the same way, one level
+///    deeper (a failing leg costs one more prediction), up to [`depth`](Self::depth) levels;
+/// 5. cuts every loop out of the joined path (it stays a walk of legal moves).
 ///
-/// When a leg cannot be planned, the plan is the first descent (which fails). Each split
-/// costs one field prediction, and only failing walks are split, so the planner costs what
-/// descent does on the paths descent gets right. With exact fields it is plain descent.
+/// When nothing arrives the plan is the first walk, which fails. Only failing walks get
+/// further predictions, so the planner costs what descent does on the paths descent gets
+/// right, and with exact fields it is plain descent. At most `2^depth` predictions
+/// per path.
 pub struct RelayDescent<M> {
     /// The field model.
     pub model: M,
@@ -38,6 +41,9 @@ pub struct RelayDescent<M> {
     /// How many levels of splits a failing walk may get (0 is plain descent; each level at
     /// most doubles the legs).
     pub depth: usize,
+    /// How many relay cells, best first, a failing walk tries with plain walks before the
+    /// best one's legs are split again (walks cost no prediction).
+    pub candidates: usize,
     name: String,
 }
 
@@ -50,6 +56,7 @@ impl<M: FieldModel> RelayDescent<M> {
             model,
             rule,
             depth,
+            candidates: usize::MAX,
             name,
         }
     }
@@ -85,41 +92,74 @@ impl<M: FieldModel> RelayDescent<M> {
             return Ok(walk);
         }
         let from_field = self.predict(grid, from)?;
-        let relay = match relay_cell(grid, &from_field, to_field) {
-            Some(r) if r != from && r != to => r,
-            _ => return Ok(walk),
+        // The walk the other way, on the field towards `from`, turned round.
+        let reverse = descend(grid, &from_field, self.rule, to, from, max_steps);
+        if reverse.success {
+            let path = reverse.path.into_iter().rev().collect();
+            return Ok(PlanOutcome {
+                success: true,
+                path,
+            });
+        }
+        let candidates: Vec<Cell2> = relay_cells(grid, &from_field, to_field, self.candidates)
+            .into_iter()
+            .filter(|&r| r != from && r != to)
+            .collect();
+        // Candidates whose two plain walks arrive cost no prediction: the best such one wins.
+        for &relay in &candidates {
+            let back = descend(grid, &from_field, self.rule, relay, from, max_steps);
+            let forth = descend(grid, to_field, self.rule, relay, to, max_steps);
+            if let Some(path) = join(&back, &forth, to, max_steps) {
+                return Ok(PlanOutcome {
+                    success: true,
+                    path,
+                });
+            }
+        }
+        // Otherwise split the legs of the best candidate again.
+        let Some(&relay) = candidates.first() else {
+            return Ok(walk);
         };
         let back = self.leg(grid, relay, from, &from_field, depth - 1, max_steps)?;
-        if !back.success {
-            return Ok(walk);
-        }
         let forth = self.leg(grid, relay, to, to_field, depth - 1, max_steps)?;
-        if !forth.success {
-            return Ok(walk);
-        }
-        let joined: Vec<Cell2> = back
-            .path
-            .iter()
-            .rev()
-            .chain(forth.path.iter().skip(1))
-            .copied()
-            .collect();
-        let mut path = remove_loops(&joined);
-        path.truncate(max_steps.saturating_add(1));
-        if path.last() != Some(&to) {
-            return Ok(walk);
-        }
-        Ok(PlanOutcome {
-            success: true,
-            path,
+        Ok(match join(&back, &forth, to, max_steps) {
+            Some(path) => PlanOutcome {
+                success: true,
+                path,
+            },
+            None => walk,
         })
     }
 }
 
-/// The cell minimising `max(a, b)` among the free cells where both fields are finite, ties to
-/// the smaller `a + b` and then to row-major order; `None` when there is no such cell.
-pub fn relay_cell(grid: &Grid2, a: &Field2, b: &Field2) -> Option<Cell2> {
-    let mut best: Option<(Cell2, f32, f32)> = None;
+/// The path `back` (from a relay to the start) walked backwards, then `forth` (from the relay
+/// to `to`), with loops cut out; `None` unless both legs arrived and the joined path reaches
+/// `to` within `max_steps` moves.
+fn join(
+    back: &PlanOutcome,
+    forth: &PlanOutcome,
+    to: Cell2,
+    max_steps: usize,
+) -> Option<Vec<Cell2>> {
+    if !back.success || !forth.success {
+        return None;
+    }
+    let joined: Vec<Cell2> = back
+        .path
+        .iter()
+        .rev()
+        .chain(forth.path.iter().skip(1))
+        .copied()
+        .collect();
+    let path = remove_loops(&joined);
+    (path.last() == Some(&to) && path.len() <= max_steps.saturating_add(1)).then_some(path)
+}
+
+/// Up to `k` relay cells, best first: the free cells where both fields are finite, by
+/// `max(a, b)`, ties to the smaller `a + b` and then to row-major order. For exact fields of a
+/// start and a goal the first is the middle of a shortest path between them.
+pub fn relay_cells(grid: &Grid2, a: &Field2, b: &Field2, k: usize) -> Vec<Cell2> {
+    let mut scored: Vec<(f32, f32, Cell2)> = Vec::new();
     for row in 0..grid.rows() {
         for col in 0..grid.cols() {
             let c = Cell2::new(row, col);
@@ -129,16 +169,24 @@ pub fn relay_cell(grid: &Grid2, a: &Field2, b: &Field2) -> Option<Cell2> {
             let (Some(x), Some(y)) = (a.get(c), b.get(c)) else {
                 continue;
             };
-            if !x.is_finite() || !y.is_finite() {
-                continue;
-            }
-            let (m, s) = (x.max(y), x + y);
-            if best.is_none_or(|(_, bm, bs)| m < bm || (m == bm && s < bs)) {
-                best = Some((c, m, s));
+            if x.is_finite() && y.is_finite() {
+                scored.push((x.max(y), x + y, c));
             }
         }
     }
-    best.map(|(c, _, _)| c)
+    let order = |p: &(f32, f32, Cell2), q: &(f32, f32, Cell2)| {
+        p.0.total_cmp(&q.0)
+            .then(p.1.total_cmp(&q.1))
+            .then(p.2.cmp(&q.2))
+    };
+    if k < scored.len() {
+        if k > 0 {
+            scored.select_nth_unstable_by(k - 1, order);
+        }
+        scored.truncate(k);
+    }
+    scored.sort_by(order);
+    scored.into_iter().map(|(_, _, c)| c).collect()
 }
 
 /// `path` with every loop cut out: when a cell comes back, the walk since its first visit is
@@ -248,17 +296,17 @@ mod tests {
     }
 
     /// Plans from the serpent's start to its goal on a field that is exact up to `horizon`
-    /// cells from its goal, with `depth` levels of relays.
-    fn plan_myopic(horizon: f32, depth: usize) -> PlanOutcome {
+    /// cells from its goal, with `depth` levels of relays and `candidates` relay cells.
+    fn plan_myopic(horizon: f32, depth: usize, candidates: usize) -> PlanOutcome {
         let mazes = parse_mazes(SERPENT).unwrap();
         let rule = MoveRule::Vin;
         let myopic = Myopic {
             exact: GraphDistance::new(Neighbourhood2::Eight(rule)),
             horizon,
         };
-        let out = RelayDescent::new(myopic, rule, depth)
-            .plan(&mazes[0].grid, c(1, 1), c(7, 9), 64)
-            .unwrap();
+        let mut relay = RelayDescent::new(myopic, rule, depth);
+        relay.candidates = candidates;
+        let out = relay.plan(&mazes[0].grid, c(1, 1), c(7, 9), 64).unwrap();
         assert!(is_legal_walk(&mazes[0].grid, rule, &out.path));
         assert_eq!(out.path.first(), Some(&c(1, 1)));
         out
@@ -273,17 +321,24 @@ mod tests {
             .unwrap();
         let shortest = exact.get(c(1, 1)).unwrap();
         assert!(shortest > 24.0, "{shortest}");
-        // Depth 0 is plain descent, which the noise far from the goal traps.
-        assert!(!plan_myopic(16.0, 0).success);
+        // Depth 0 is plain descent, which the bumps far from the goal trap.
+        assert!(!plan_myopic(16.0, 0, 1).success);
         // One split in the middle: each leg lies within 16 cells of its own goal.
-        let one = plan_myopic(16.0, 1);
+        let one = plan_myopic(16.0, 1, 1);
         assert!(one.success, "{:?}", one.path);
         assert!((one.length() - shortest).abs() < 1e-4);
-        // A field right only within 8 cells needs legs of a quarter of the path: two levels.
-        assert!(!plan_myopic(8.0, 1).success);
-        let two = plan_myopic(8.0, 2);
+        // A field right only within 8 cells needs legs of a quarter of the path: with one
+        // candidate, two levels.
+        assert!(!plan_myopic(8.0, 1, 1).success);
+        let two = plan_myopic(8.0, 2, 1);
         assert!(two.success, "{:?}", two.path);
         assert!((two.length() - shortest).abs() < 1e-4);
+        // Bumps lie on every leg longer than 8 cells, so more candidates cannot replace the
+        // second level, and the two compose.
+        assert!(!plan_myopic(8.0, 1, usize::MAX).success);
+        let all = plan_myopic(8.0, 2, usize::MAX);
+        assert!(all.success, "{:?}", all.path);
+        assert!((all.length() - shortest).abs() < 1e-4);
     }
 
     #[test]
