@@ -7,6 +7,7 @@ use envfield::grid::{parse_mazes, Cell2, Field2, Grid2, Maze, MoveRule, Neighbou
 use envfield::mazes::{GeneratorKind, MazeGenerator};
 use envfield::plan::{
     descend, evaluate, is_legal_walk, AStar, EvalConfig, FieldDescent, PlanOutcome, Planner,
+    RelayDescent,
 };
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
@@ -280,6 +281,8 @@ fn pairs_naming_missing_mazes_or_walls_are_errors() {
 const FLOOR_8: f64 = 98.0;
 const FLOOR_16: f64 = 97.0;
 const FLOOR_28: f64 = 96.0;
+/// The same for the shipped field with relays (`RelayDescent`, depth 2), 100% on each full set.
+const RELAY_FLOOR: f64 = 99.0;
 
 /// The shipped learned field (models/context.safetensors) plans on VIN's test sets under the
 /// `vin` rule about as well as the README says (every 5th maze, so the debug-build test stays
@@ -293,6 +296,7 @@ fn shipped_field_model_solves_vin_test_sets() {
     }
     let net = envfield::nets::FieldNet::load(&model).unwrap();
     let planner = FieldDescent::new(&net, MoveRule::Vin);
+    let relay = RelayDescent::new(&net, MoveRule::Vin, 2);
     for (n, floor) in [(8, FLOOR_8), (16, FLOOR_16), (28, FLOOR_28)] {
         let Some(path) = vin_file(n) else { return };
         let mazes: Vec<Maze> = envfield::grid::read_mazes(&path)
@@ -317,5 +321,20 @@ fn shipped_field_model_solves_vin_test_sets() {
             "{}",
             report.summary.path_ratio
         );
+        // Relays only replan walks that fail, so they never lose a pair descent solves.
+        let relayed = evaluate(&relay, &mazes, &cfg, &mut |_, _| {}).unwrap();
+        for (plain, r) in report.results.iter().zip(&relayed.results) {
+            assert!(
+                r.success || !plain.success,
+                "maze {}: relays lost it",
+                plain.maze
+            );
+        }
+        assert!(
+            relayed.summary.success_rate >= RELAY_FLOOR,
+            "vin_test_{n} with relays: {}% < {RELAY_FLOOR}%",
+            relayed.summary.success_rate
+        );
+        assert!(relayed.summary.path_ratio < 1.05);
     }
 }
