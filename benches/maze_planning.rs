@@ -43,7 +43,7 @@ fn bench_planners(c: &mut Criterion) {
     let relay = |size: usize| {
         model(&format!("context_{size}.safetensors"))
             .or_else(|| model("context.safetensors"))
-            .map(|p| RelayDescent::new(FieldNet::load(p).expect("shipped model loads"), rule, 2))
+            .map(|p| RelayDescent::new(FieldNet::load(p).expect("shipped model loads"), rule, 1))
     };
     for size in [8usize, 16, 28, 64] {
         let field = load("context", size);

@@ -21,7 +21,8 @@ use envfield::grid::{
 use envfield::mazes::{GeneratorKind, MazeGenerator};
 use envfield::nets::{FieldNet, Vin};
 use envfield::plan::{
-    evaluate, AStar, DecisionProfile, EvalConfig, FieldDescent, Planner, RelayDescent, Report,
+    evaluate, AStar, DecisionProfile, EvalConfig, FieldDescent, Octile, Planner, RelayDescent,
+    Report,
 };
 use std::path::{Path, PathBuf};
 
@@ -63,19 +64,21 @@ struct Args {
     #[arg(long, default_value_t = 0)]
     seed: u64,
     /// Planners, comma-separated: field (the learned context-aligned field, descent), relay
-    /// (the same field; a descent that fails is split at a relay cell: see --relays), hyper (the hypernetwork
-    /// field), vin (the VIN baseline, one network pass per step), fmm
+    /// (the same field; a descent that fails is planned again through a relay cell: see
+    /// --relays), octile and octile-relay (the octile distance, blind to walls: the control),
+    /// hyper (the hypernetwork field), vin (the VIN baseline, one network pass per step), fmm
     /// (fast-marching field descent), graph (exact graph-distance field descent), astar.
-    #[arg(long, default_value = "field,relay,vin,astar,fmm")]
+    #[arg(long, default_value = "field,relay,octile-relay,vin,astar,fmm")]
     planner: String,
     /// For `relay`: how many times a failing descent may be split in two at the cell where
     /// the start's and the goal's predicted fields meet (each split, one more prediction).
-    #[arg(long, default_value_t = 2)]
+    #[arg(long, default_value_t = 1)]
     relays: usize,
     /// For `relay`: how many relay cells, best first, a failing descent tries with plain walks
-    /// (no prediction) before the best one's legs are split again (default: every cell).
-    #[arg(long)]
-    candidates: Option<usize>,
+    /// (no prediction) before the best one's legs are split again. More make the planner a
+    /// search of its own (see `octile-relay`, the same planner on a field blind to walls).
+    #[arg(long, default_value_t = 1)]
+    candidates: usize,
     /// Weights for `field` or `hyper` (default: models/context.safetensors or
     /// models/hyper.safetensors; a file named <arch>_<size>.safetensors there wins for mazes of
     /// that size). VIN always loads models/vin_<size>.safetensors unless this names a VIN file.
@@ -143,6 +146,16 @@ impl Choice {
         let (model, views) = (args.model.as_deref(), args.views);
         let model: Box<dyn FieldModel + Send + Sync> = match name {
             "fmm" => Box::new(FastMarching::default()),
+            "octile" => Box::new(Octile),
+            "octile-relay" => {
+                let mut relay = RelayDescent::new(
+                    Box::new(Octile) as Box<dyn FieldModel + Send + Sync>,
+                    rule,
+                    args.relays,
+                );
+                relay.candidates = args.candidates;
+                return Ok(Choice::Relay(relay));
+            }
             "graph" => Box::new(GraphDistance::new(Neighbourhood2::Eight(rule))),
             "astar" => return Ok(Choice::AStar(AStar { rule })),
             "field" | "relay" | "hyper" => {
@@ -165,7 +178,7 @@ impl Choice {
                 };
                 if name == "relay" {
                     let mut relay = RelayDescent::new(learned, rule, args.relays);
-                    relay.candidates = args.candidates.unwrap_or(relay.candidates);
+                    relay.candidates = args.candidates;
                     return Ok(Choice::Relay(relay));
                 }
                 learned
@@ -180,7 +193,7 @@ impl Choice {
                 return Ok(Choice::Vin(Box::new(vin)));
             }
             other => {
-                bail!("unknown planner {other:?} (expected field, relay, hyper, vin, fmm, graph or astar)")
+                bail!("unknown planner {other:?} (expected field, relay, octile, octile-relay, hyper, vin, fmm, graph or astar)")
             }
         };
         Ok(Choice::Field(FieldDescent::new(model, rule)))

@@ -296,7 +296,7 @@ fn shipped_field_model_solves_vin_test_sets() {
     }
     let net = envfield::nets::FieldNet::load(&model).unwrap();
     let planner = FieldDescent::new(&net, MoveRule::Vin);
-    let relay = RelayDescent::new(&net, MoveRule::Vin, 2);
+    let relay = RelayDescent::new(&net, MoveRule::Vin, 1);
     for (n, floor) in [(8, FLOOR_8), (16, FLOOR_16), (28, FLOOR_28)] {
         let Some(path) = vin_file(n) else { return };
         let mazes: Vec<Maze> = envfield::grid::read_mazes(&path)

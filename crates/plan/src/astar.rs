@@ -1,6 +1,6 @@
 use crate::planner::check_query;
 use crate::{PlanOutcome, Planner, Result};
-use envfield_grid::{Cell2, Grid2, MoveRule, Neighbourhood2};
+use envfield_grid::{Cell2, Field2, FieldModel, Grid2, MoveRule, Neighbourhood2};
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
@@ -27,10 +27,38 @@ impl Ord for Node {
     }
 }
 
-fn octile(a: Cell2, b: Cell2) -> f32 {
+pub(crate) fn octile(a: Cell2, b: Cell2) -> f32 {
     let dr = a.row.abs_diff(b.row) as f32;
     let dc = a.col.abs_diff(b.col) as f32;
     dr.max(dc) + (std::f32::consts::SQRT_2 - 1.0) * dr.min(dc)
+}
+
+/// The octile distance to the goal on every free cell (obstacles infinite), blind to the walls
+/// in between: what a field knows with no knowledge of the maze's layout. The control for
+/// learned fields and for planners built on them (how much of a planner's success does not
+/// come from its field).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Octile;
+
+impl FieldModel for Octile {
+    fn name(&self) -> &str {
+        "octile"
+    }
+
+    fn predict(&self, grid: &Grid2, goal: Cell2) -> envfield_grid::Result<Field2> {
+        let mut values = Vec::with_capacity(grid.len());
+        for row in 0..grid.rows() {
+            for col in 0..grid.cols() {
+                let c = Cell2::new(row, col);
+                values.push(if grid.is_free(c) {
+                    octile(c, goal)
+                } else {
+                    f32::INFINITY
+                });
+            }
+        }
+        Field2::new(grid.rows(), grid.cols(), values)
+    }
 }
 
 impl Planner for AStar {

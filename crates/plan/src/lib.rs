@@ -36,7 +36,7 @@ mod planner;
 mod profile;
 mod relay;
 
-pub use astar::AStar;
+pub use astar::{AStar, Octile};
 pub use descent::{descend, descent_move, is_wrong_move, FieldDescent};
 pub use error::{PlanError, Result};
 pub use gradient::{gradient_descent, ContinuousPath, GradientDescentConfig};

@@ -42,21 +42,25 @@ pub struct RelayDescent<M> {
     /// most doubles the legs).
     pub depth: usize,
     /// How many relay cells, best first, a failing walk tries with plain walks before the
-    /// best one's legs are split again (walks cost no prediction).
+    /// best one's legs are split again (walks cost no prediction). 1 by default. More
+    /// candidates make the planner a search of its own: with every cell a candidate, even a
+    /// field blind to the walls ([`Octile`](crate::Octile)) solves nearly every gridworld
+    /// maze, so the default keeps the planner's success down to its field.
     pub candidates: usize,
     name: String,
 }
 
 impl<M: FieldModel> RelayDescent<M> {
     /// Relay descent on `model` under `rule`, splitting failing walks up to `depth` levels
-    /// deep; the planner is named after the model with a `+relay` suffix.
+    /// deep, one relay candidate per split; the planner is named after the model with a
+    /// `+relay` suffix.
     pub fn new(model: M, rule: MoveRule, depth: usize) -> Self {
         let name = format!("{}+relay", model.name());
         Self {
             model,
             rule,
             depth,
-            candidates: usize::MAX,
+            candidates: 1,
             name,
         }
     }
