@@ -120,3 +120,38 @@ impl Planner for AStar {
         Ok(PlanOutcome { path, success })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use envfield_eikonal::GraphDistance;
+    use envfield_grid::parse_mazes;
+
+    #[test]
+    fn octile_is_the_exact_field_without_walls_and_blind_with_them() {
+        let open = &parse_mazes(".....\n.....\n..G..\n.....\n")
+            .unwrap()
+            .remove(0)
+            .grid;
+        let goal = Cell2::new(2, 2);
+        let exact = GraphDistance::new(Neighbourhood2::Eight(MoveRule::Vin))
+            .predict(open, goal)
+            .unwrap();
+        let blind = Octile.predict(open, goal).unwrap();
+        for (a, b) in exact.values().iter().zip(blind.values()) {
+            assert!((a - b).abs() < 1e-5, "{a} {b}");
+        }
+        // A wall between: the exact field goes round it, octile does not see it.
+        let walled = &parse_mazes("G.#..\n..#..\n..#..\n.....\n")
+            .unwrap()
+            .remove(0)
+            .grid;
+        let blind = Octile.predict(walled, Cell2::new(0, 0)).unwrap();
+        assert_eq!(blind.get(Cell2::new(0, 2)), Some(f32::INFINITY));
+        assert_eq!(blind.get(Cell2::new(0, 3)), Some(3.0));
+        let exact = GraphDistance::new(Neighbourhood2::Eight(MoveRule::Vin))
+            .predict(walled, Cell2::new(0, 0))
+            .unwrap();
+        assert!(exact.get(Cell2::new(0, 3)).unwrap() > 5.0);
+    }
+}
