@@ -73,6 +73,10 @@ struct Args {
     /// the run it continues: the checkpoint records them and other ones are an error.
     #[arg(long)]
     resume: Option<PathBuf>,
+    /// With --resume: continue on purpose on data other than the checkpoint's (fine-tuning,
+    /// a curriculum); these data flags replace the recorded ones.
+    #[arg(long)]
+    new_data: bool,
     /// Held-out mazes for the navigation check at the end.
     #[arg(long, default_value_t = 200)]
     eval_mazes: usize,
@@ -224,13 +228,23 @@ fn main() -> Result<()> {
         "generator {}, sizes {}, {} mazes x {} goals per size, target {}, seed {}",
         args.generator, args.size, args.mazes, args.goals_per_maze, args.target, args.seed
     );
+    if args.new_data && args.resume.is_none() {
+        bail!("--new-data changes the data of a resumed run: give --resume too");
+    }
     let resumed = match &args.resume {
         Some(path) => {
             let t = Trainer::resume(path)?;
             match t.data_description() {
+                Some(before) if before != data && args.new_data => {
+                    eprintln!(
+                        "--new-data: {} was trained on {before}; going on with {data}",
+                        path.display()
+                    );
+                }
                 Some(before) if before != data => bail!(
                     "{} was trained on data ({before}) other than these flags give ({data}): \
-                     pass the data flags of the run it continues",
+                     pass the data flags of the run it continues, or --new-data to change them \
+                     on purpose",
                     path.display()
                 ),
                 Some(_) => {}
