@@ -70,7 +70,8 @@ struct Args {
     /// Resume from this checkpoint (its model and training configs win over the flags,
     /// except --steps and the flags that say they apply to a resumed run). The data flags
     /// (--generator, --size, --mazes, --goals-per-maze, --target, --seed) must be the ones of
-    /// the run it continues: the checkpoint records them and other ones are an error.
+    /// the run it continues: the checkpoint records them and other ones are an error (unless
+    /// --new-data).
     #[arg(long)]
     resume: Option<PathBuf>,
     /// With --resume: continue on purpose on data other than the checkpoint's (fine-tuning,
