@@ -55,6 +55,26 @@ pub fn is_wrong_move(
     descent_move(grid, field, rule, cell).is_none_or(|n| distance(n) > best + 1e-4 * best.max(1.0))
 }
 
+/// `model`'s field towards `goal` on `grid`, checked to have the grid's shape.
+pub(crate) fn predict_checked(
+    model: &impl FieldModel,
+    grid: &Grid2,
+    goal: Cell2,
+) -> Result<Field2> {
+    let field = model.predict(grid, goal)?;
+    if (field.rows(), field.cols()) != (grid.rows(), grid.cols()) {
+        return Err(crate::PlanError::Invalid(format!(
+            "model {} returned a {}x{} field for a {}x{} grid",
+            model.name(),
+            field.rows(),
+            field.cols(),
+            grid.rows(),
+            grid.cols()
+        )));
+    }
+    Ok(field)
+}
+
 /// Walks down `field` from `start` (see [`FieldDescent`]).
 pub fn descend(
     grid: &Grid2,
@@ -96,17 +116,7 @@ impl<M: FieldModel> Planner for FieldDescent<M> {
         max_steps: usize,
     ) -> Result<PlanOutcome> {
         check_query(grid, start, goal)?;
-        let field = self.model.predict(grid, goal)?;
-        if (field.rows(), field.cols()) != (grid.rows(), grid.cols()) {
-            return Err(crate::PlanError::Invalid(format!(
-                "model {} returned a {}x{} field for a {}x{} grid",
-                self.name,
-                field.rows(),
-                field.cols(),
-                grid.rows(),
-                grid.cols()
-            )));
-        }
+        let field = predict_checked(&self.model, grid, goal)?;
         Ok(descend(grid, &field, self.rule, start, goal, max_steps))
     }
 }

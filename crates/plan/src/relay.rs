@@ -1,6 +1,6 @@
-use crate::descent::descend;
+use crate::descent::{descend, predict_checked};
 use crate::planner::check_query;
-use crate::{PlanError, PlanOutcome, Planner, Result};
+use crate::{PlanOutcome, Planner, Result};
 use envfield_grid::{Cell2, Field2, FieldModel, Grid2, MoveRule};
 use std::collections::HashMap;
 
@@ -66,18 +66,7 @@ impl<M: FieldModel> RelayDescent<M> {
     }
 
     fn predict(&self, grid: &Grid2, goal: Cell2) -> Result<Field2> {
-        let field = self.model.predict(grid, goal)?;
-        if (field.rows(), field.cols()) != (grid.rows(), grid.cols()) {
-            return Err(PlanError::Invalid(format!(
-                "model {} returned a {}x{} field for a {}x{} grid",
-                self.model.name(),
-                field.rows(),
-                field.cols(),
-                grid.rows(),
-                grid.cols()
-            )));
-        }
-        Ok(field)
+        predict_checked(&self.model, grid, goal)
     }
 
     /// Plans from `from` to `to` on `to_field` (the field towards `to`), splitting a failing
@@ -362,6 +351,37 @@ mod tests {
             assert!(b.success);
             assert_eq!(a, b);
         }
+    }
+
+    /// A broken model: a 1x1 field for any grid.
+    struct Tiny;
+
+    impl FieldModel for Tiny {
+        fn name(&self) -> &str {
+            "tiny"
+        }
+
+        fn predict(&self, _: &Grid2, _: Cell2) -> envfield_grid::Result<Field2> {
+            Field2::new(1, 1, vec![0.0])
+        }
+    }
+
+    #[test]
+    fn a_field_of_the_wrong_shape_is_an_error() {
+        let mazes = parse_mazes(SERPENT).unwrap();
+        let grid = &mazes[0].grid;
+        let rule = MoveRule::Vin;
+        let e = RelayDescent::new(Tiny, rule, 1)
+            .plan(grid, c(1, 1), c(7, 9), 64)
+            .unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("returned a 1x1 field for a 9x11 grid"),
+            "{e}"
+        );
+        assert!(FieldDescent::new(Tiny, rule)
+            .plan(grid, c(1, 1), c(7, 9), 64)
+            .is_err());
     }
 
     #[test]
