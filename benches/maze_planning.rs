@@ -3,8 +3,8 @@
 //! whole field computed, then the walk), A*, and, when the shipped models are in `models/`,
 //! the learned field (the whole field predicted once, then descent; all inference included),
 //! the same field with relays (`RelayDescent`: a failing walk is planned again through a relay
-//! cell, one more prediction per split), the hypernetwork, and VIN (one network pass per step, VIN's own protocol). Pairs and rule
-//! are `vin` here, as in the maze benchmark.
+//! cell, one more prediction per split), the hypernetwork, and VIN (one network pass per step,
+//! VIN's own protocol). Pairs and rule are `vin` here, as in the maze benchmark.
 //!
 //! `cargo bench --bench maze_planning`
 
@@ -35,16 +35,13 @@ fn bench_planners(c: &mut Criterion) {
     let fmm = FieldDescent::new(FastMarching::default(), rule);
     let graph = FieldDescent::new(GraphDistance::new(Neighbourhood2::Eight(rule)), rule);
     let astar = AStar { rule };
-    let load = |arch: &str, size: usize| {
+    let file = |arch: &str, size: usize| {
         model(&format!("{arch}_{size}.safetensors"))
             .or_else(|| model(&format!("{arch}.safetensors")))
-            .map(|p| FieldDescent::new(FieldNet::load(p).expect("shipped model loads"), rule))
     };
-    let relay = |size: usize| {
-        model(&format!("context_{size}.safetensors"))
-            .or_else(|| model("context.safetensors"))
-            .map(|p| RelayDescent::new(FieldNet::load(p).expect("shipped model loads"), rule, 1))
-    };
+    let net = |p: std::path::PathBuf| FieldNet::load(p).expect("shipped model loads");
+    let load = |arch: &str, size: usize| file(arch, size).map(|p| FieldDescent::new(net(p), rule));
+    let relay = |size: usize| file("context", size).map(|p| RelayDescent::new(net(p), rule, 1));
     for size in [8usize, 16, 28, 64] {
         let field = load("context", size);
         let relayed = relay(size);
