@@ -42,7 +42,8 @@ pub struct RelayDescent<M> {
     /// most doubles the legs).
     pub depth: usize,
     /// How many relay cells, best first, a failing walk tries with plain walks before the
-    /// best one's legs are split again (walks cost no prediction). 1 by default. More
+    /// best one's legs are split again (walks cost no prediction). 1 by default; 0 leaves only
+    /// the walk back from the goal. More
     /// candidates make the planner a search of its own: with every cell a candidate, even a
     /// field blind to the walls ([`Octile`](crate::Octile)) solves nearly every gridworld
     /// maze, so the default keeps the planner's success down to its field.
