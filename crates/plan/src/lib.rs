@@ -4,8 +4,9 @@
 //! - [`FieldDescent`]: predict the whole field once with any
 //!   [`FieldModel`](envfield_grid::FieldModel), then step to the best neighbour under a
 //!   [`MoveRule`](envfield_grid::MoveRule) (paper section 4.1).
-//! - [`RelayDescent`]: descent that splits long paths at a relay cell found from the start's
-//!   and the goal's fields, so no leg relies on a field far from its goal.
+//! - [`RelayDescent`]: descent that, when its walk fails, plans again through a relay cell
+//!   found from the start's and the goal's fields, so no leg relies on a field far from its
+//!   goal.
 //! - [`gradient_descent`]: fixed-length steps against the gradient of a continuous field
 //!   (paper Fig. 3c).
 //! - [`AStar`]: octile A* under either move rule.

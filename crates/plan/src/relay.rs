@@ -31,8 +31,8 @@ use std::collections::HashMap;
 ///
 /// When nothing arrives the plan is the first walk, which fails. Only failing walks get
 /// further predictions, so the planner costs what descent does on the paths descent gets
-/// right, and with exact fields it is plain descent. At most `2^depth` predictions
-/// per path.
+/// right, and with exact fields it is plain descent. The two legs of a relay share the field
+/// towards it, so a path costs at most `1 + 2^(depth - 1)` predictions (two at depth 1).
 pub struct RelayDescent<M> {
     /// The field model.
     pub model: M,
@@ -43,10 +43,10 @@ pub struct RelayDescent<M> {
     pub depth: usize,
     /// How many relay cells, best first, a failing walk tries with plain walks before the
     /// best one's legs are split again (walks cost no prediction). 1 by default; 0 leaves only
-    /// the walk back from the goal. More
-    /// candidates make the planner a search of its own: with every cell a candidate, even a
-    /// field blind to the walls ([`Octile`](crate::Octile)) solves nearly every gridworld
-    /// maze, so the default keeps the planner's success down to its field.
+    /// the walk back from the goal. More candidates make the planner a search of its own: with
+    /// every cell a candidate, even a field blind to the walls ([`Octile`](crate::Octile))
+    /// solves nearly every gridworld maze, so the default keeps the planner's success down to
+    /// its field.
     pub candidates: usize,
     name: String,
 }
@@ -71,13 +71,16 @@ impl<M: FieldModel> RelayDescent<M> {
     }
 
     /// Plans from `from` to `to` on `to_field` (the field towards `to`), splitting a failing
-    /// walk at a relay cell while `depth` allows.
+    /// walk at a relay cell while `depth` allows. `from_field` holds the field towards `from`
+    /// once predicted: the two legs of a relay start from the same cell and share it.
+    #[allow(clippy::too_many_arguments)]
     fn leg(
         &self,
         grid: &Grid2,
         from: Cell2,
         to: Cell2,
         to_field: &Field2,
+        from_field: &mut Option<Field2>,
         depth: usize,
         max_steps: usize,
     ) -> Result<PlanOutcome> {
@@ -85,9 +88,14 @@ impl<M: FieldModel> RelayDescent<M> {
         if walk.success || depth == 0 {
             return Ok(walk);
         }
-        let from_field = self.predict(grid, from)?;
+        if from_field.is_none() {
+            *from_field = Some(self.predict(grid, from)?);
+        }
+        let Some(from_field) = from_field.as_ref() else {
+            unreachable!("predicted just above")
+        };
         // The walk the other way, on the field towards `from`, turned round.
-        let reverse = descend(grid, &from_field, self.rule, to, from, max_steps);
+        let reverse = descend(grid, from_field, self.rule, to, from, max_steps);
         if reverse.success {
             let path = reverse.path.into_iter().rev().collect();
             return Ok(PlanOutcome {
@@ -95,13 +103,13 @@ impl<M: FieldModel> RelayDescent<M> {
                 path,
             });
         }
-        let candidates: Vec<Cell2> = relay_cells(grid, &from_field, to_field, self.candidates)
+        let candidates: Vec<Cell2> = relay_cells(grid, from_field, to_field, self.candidates)
             .into_iter()
             .filter(|&r| r != from && r != to)
             .collect();
         // Candidates whose two plain walks arrive cost no prediction: the best such one wins.
         for &relay in &candidates {
-            let back = descend(grid, &from_field, self.rule, relay, from, max_steps);
+            let back = descend(grid, from_field, self.rule, relay, from, max_steps);
             let forth = descend(grid, to_field, self.rule, relay, to, max_steps);
             if let Some(path) = join(&back, &forth, to, max_steps) {
                 return Ok(PlanOutcome {
@@ -114,8 +122,25 @@ impl<M: FieldModel> RelayDescent<M> {
         let Some(&relay) = candidates.first() else {
             return Ok(walk);
         };
-        let back = self.leg(grid, relay, from, &from_field, depth - 1, max_steps)?;
-        let forth = self.leg(grid, relay, to, to_field, depth - 1, max_steps)?;
+        let mut relay_field = None;
+        let back = self.leg(
+            grid,
+            relay,
+            from,
+            from_field,
+            &mut relay_field,
+            depth - 1,
+            max_steps,
+        )?;
+        let forth = self.leg(
+            grid,
+            relay,
+            to,
+            to_field,
+            &mut relay_field,
+            depth - 1,
+            max_steps,
+        )?;
         Ok(match join(&back, &forth, to, max_steps) {
             Some(path) => PlanOutcome {
                 success: true,
@@ -216,7 +241,9 @@ impl<M: FieldModel> Planner for RelayDescent<M> {
     ) -> Result<PlanOutcome> {
         check_query(grid, start, goal)?;
         let to_goal = self.predict(grid, goal)?;
-        self.leg(grid, start, goal, &to_goal, self.depth, max_steps)
+        self.leg(
+            grid, start, goal, &to_goal, &mut None, self.depth, max_steps,
+        )
     }
 }
 
@@ -333,6 +360,44 @@ mod tests {
         let all = plan_myopic(8.0, 2, usize::MAX);
         assert!(all.success, "{:?}", all.path);
         assert!((all.length() - shortest).abs() < 1e-4);
+    }
+
+    /// Counts the predictions of the model it wraps.
+    struct Counted<M> {
+        inner: M,
+        calls: std::sync::atomic::AtomicUsize,
+    }
+
+    impl<M: FieldModel> FieldModel for Counted<M> {
+        fn name(&self) -> &str {
+            self.inner.name()
+        }
+
+        fn predict(&self, grid: &Grid2, goal: Cell2) -> envfield_grid::Result<Field2> {
+            self.calls
+                .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            self.inner.predict(grid, goal)
+        }
+    }
+
+    #[test]
+    fn the_legs_of_a_relay_share_its_field() {
+        let mazes = parse_mazes(SERPENT).unwrap();
+        let rule = MoveRule::Vin;
+        let model = Counted {
+            inner: Myopic {
+                exact: GraphDistance::new(Neighbourhood2::Eight(rule)),
+                horizon: 8.0,
+            },
+            calls: 0.into(),
+        };
+        let relay = RelayDescent::new(model, rule, 2);
+        let out = relay.plan(&mazes[0].grid, c(1, 1), c(7, 9), 64).unwrap();
+        assert!(out.success, "{:?}", out.path);
+        // The goal's field, the start's, and one field towards the relay cell for both of
+        // its failing legs: 1 + 2^(2 - 1).
+        let calls = relay.model.calls.load(std::sync::atomic::Ordering::Relaxed);
+        assert_eq!(calls, 3);
     }
 
     #[test]
