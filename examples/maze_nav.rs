@@ -144,21 +144,18 @@ fn model_file(arch: &str, size: usize, explicit: Option<&Path>) -> Result<PathBu
 impl Choice {
     fn parse(name: &str, rule: MoveRule, size: usize, args: &Args) -> Result<Self> {
         let (model, views) = (args.model.as_deref(), args.views);
-        let model: Box<dyn FieldModel + Send + Sync> = match name {
+        // `relay` and `octile-relay` are `field` and `octile` planned with relays.
+        let (base, relayed) = match name {
+            "relay" => ("field", true),
+            "octile-relay" => ("octile", true),
+            other => (other, false),
+        };
+        let model: Box<dyn FieldModel + Send + Sync> = match base {
             "fmm" => Box::new(FastMarching::default()),
             "octile" => Box::new(Octile),
-            "octile-relay" => {
-                let mut relay = RelayDescent::new(
-                    Box::new(Octile) as Box<dyn FieldModel + Send + Sync>,
-                    rule,
-                    args.relays,
-                );
-                relay.candidates = args.candidates;
-                return Ok(Choice::Relay(relay));
-            }
             "graph" => Box::new(GraphDistance::new(Neighbourhood2::Eight(rule))),
             "astar" => return Ok(Choice::AStar(AStar { rule })),
-            "field" | "relay" | "hyper" => {
+            "field" | "hyper" => {
                 let arch = if name == "hyper" { "hyper" } else { "context" };
                 let file = model_file(arch, size, model)?;
                 // Several comma-separated files: an ensemble, the mean of their fields.
@@ -171,17 +168,11 @@ impl Choice {
                     1 => Box::new(nets.remove(0)),
                     _ => Box::new(Ensemble::new(nets)?),
                 };
-                let learned = if views == 1 {
+                if views == 1 {
                     learned
                 } else {
                     Box::new(Symmetric::new(learned, views)?)
-                };
-                if name == "relay" {
-                    let mut relay = RelayDescent::new(learned, rule, args.relays);
-                    relay.candidates = args.candidates;
-                    return Ok(Choice::Relay(relay));
                 }
-                learned
             }
             "vin" => {
                 let file = match model.filter(|p| Vin::load(p).is_ok()) {
@@ -192,11 +183,17 @@ impl Choice {
                     Vin::load(&file).with_context(|| format!("loading {}", file.display()))?;
                 return Ok(Choice::Vin(Box::new(vin)));
             }
-            other => {
-                bail!("unknown planner {other:?} (expected field, relay, octile, octile-relay, hyper, vin, fmm, graph or astar)")
+            _ => {
+                bail!("unknown planner {name:?} (expected field, relay, octile, octile-relay, hyper, vin, fmm, graph or astar)")
             }
         };
-        Ok(Choice::Field(FieldDescent::new(model, rule)))
+        Ok(if relayed {
+            let mut relay = RelayDescent::new(model, rule, args.relays);
+            relay.candidates = args.candidates;
+            Choice::Relay(relay)
+        } else {
+            Choice::Field(FieldDescent::new(model, rule))
+        })
     }
 
     fn planner(&self) -> &dyn Planner {
