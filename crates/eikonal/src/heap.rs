@@ -120,6 +120,12 @@ impl IndexedHeap {
         self.place(k, entry, recs);
     }
 
+    /// The cell of the entry of smallest value, without removing it.
+    #[inline]
+    pub(crate) fn peek_cell(&self) -> Option<u32> {
+        self.entries.first().map(|&e| e as u32)
+    }
+
     /// Removes and returns the entry of smallest value. The caller retags its cell.
     #[inline]
     pub(crate) fn pop(&mut self, recs: &mut [Rec]) -> Option<u64> {
