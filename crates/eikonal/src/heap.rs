@@ -1,5 +1,5 @@
-//! The priority queue of fast marching: an indexed d-ary min-heap (d = `ARITY`) of packed
-//! `(value, cell)` words.
+//! The priority queue of fast marching: an indexed d-ary min-heap (d = `ARITY`, 2 or 4) of
+//! packed `(value, cell)` words.
 //!
 //! Fast marching spends about half its time here, so the layout is tuned. A tentative value is
 //! a non-negative f32, whose bit pattern orders like the value, so an entry is one `u64`
@@ -7,11 +7,12 @@
 //! at most once; a position table lets its value move in either direction (second-order updates
 //! may raise a tentative value). `pop` walks the hole down to a leaf along the smallest
 //! children before sifting the last entry up ("bottom-up" deletion), which saves most
-//! comparisons because the last entry of a front belongs near the bottom. `ARITY` 2 ran about
-//! 15% fewer instructions than 4 or 8 here (callgrind on 28^2 and 256^2 grids), and no slower
-//! on 1024^2.
-
-const ARITY: usize = 2;
+//! comparisons because the last entry of a front belongs near the bottom. The marcher picks the
+//! arity by grid size: 2 on small grids, where it runs about 15% fewer instructions than 4 or
+//! 8 (callgrind on 28^2 and 256^2 grids) and 28^2 solves took 10% less CPU time; 4 on large
+//! ones, where a pop is a chain of dependent loads and cache misses (one per level, each moving
+//! an entry and rewriting its cell's record), so half the levels beat fewer comparisons: CPU
+//! time -9% on 128^3 and -3 to -5% on 1024^2 at second order.
 
 /// Per-cell record of the marcher: the accepted value (infinity until accepted) and a tag
 /// that is the cell's heap position while it is queued, or one of [`FAR`], [`BLOCKED`],
@@ -31,7 +32,7 @@ pub(crate) const BLOCKED: u32 = u32::MAX - 1;
 /// Accepted.
 pub(crate) const KNOWN: u32 = u32::MAX - 2;
 
-pub(crate) struct IndexedHeap {
+pub(crate) struct IndexedHeap<const ARITY: usize> {
     entries: Vec<u64>,
 }
 
@@ -48,7 +49,7 @@ pub(crate) fn unpack(entry: u64) -> (f32, u32) {
     (f32::from_bits((entry >> 32) as u32), entry as u32)
 }
 
-impl IndexedHeap {
+impl<const ARITY: usize> IndexedHeap<ARITY> {
     pub(crate) fn new() -> Self {
         Self {
             entries: Vec::with_capacity(1024),
@@ -173,8 +174,13 @@ mod tests {
 
     #[test]
     fn pops_many_pseudo_random_keys_in_order_after_moves() {
+        pops_in_order_after_moves::<2>();
+        pops_in_order_after_moves::<4>();
+    }
+
+    fn pops_in_order_after_moves<const ARITY: usize>() {
         let n = 5000u32;
-        let mut h = IndexedHeap::new();
+        let mut h = IndexedHeap::<ARITY>::new();
         let mut recs = vec![
             Rec {
                 known: f32::INFINITY,

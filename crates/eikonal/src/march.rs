@@ -77,7 +77,7 @@ impl<const N: usize> Lattice<N> {
     }
 }
 
-struct Marcher<const N: usize> {
+struct Marcher<const N: usize, const ARITY: usize> {
     strides: [usize; N],
     /// Per cell: the accepted value (infinity for every other cell, so the stencil reads values
     /// without looking at the state) and the state tag. f32 keeps the working set small (the
@@ -88,10 +88,10 @@ struct Marcher<const N: usize> {
     tau: Option<Vec<f64>>,
     tau_uniform: f64,
     second_order: bool,
-    heap: IndexedHeap,
+    heap: IndexedHeap<ARITY>,
 }
 
-impl<const N: usize> Marcher<N> {
+impl<const N: usize, const ARITY: usize> Marcher<N, ARITY> {
     #[inline]
     fn tau(&self, i: usize) -> f64 {
         match &self.tau {
@@ -287,9 +287,20 @@ fn sort3(a: f64, b: f64, c: f64) -> (f64, f64, f64) {
     (lo.min(mid), lo.max(mid), top)
 }
 
+/// Padded grids from this many cells on use the 4-ary heap (see `heap`).
+const LARGE_GRID: usize = 1 << 16;
+
 /// Runs fast marching and returns the C-order values (f32; infinity where not reached).
 pub(crate) fn march<const N: usize>(p: &Problem<'_, N>) -> Vec<f32> {
     let lat = Lattice::new(p.dims);
+    if lat.len >= LARGE_GRID {
+        march_with::<N, 4>(p, lat)
+    } else {
+        march_with::<N, 2>(p, lat)
+    }
+}
+
+fn march_with<const N: usize, const ARITY: usize>(p: &Problem<'_, N>, lat: Lattice<N>) -> Vec<f32> {
     let mut recs = vec![
         Rec {
             known: f32::INFINITY,
@@ -307,7 +318,7 @@ pub(crate) fn march<const N: usize>(p: &Problem<'_, N>) -> Vec<f32> {
             }
         }
     });
-    let mut m = Marcher::<N> {
+    let mut m = Marcher::<N, ARITY> {
         strides: lat.strides,
         recs,
         tau,
