@@ -9,7 +9,7 @@
 //! children before sifting the last entry up ("bottom-up" deletion), which saves most
 //! comparisons because the last entry of a front belongs near the bottom. The marcher picks the
 //! arity by grid size: 2 on small grids, where it runs about 15% fewer instructions than 4 or
-//! 8 (callgrind on 28^2 and 256^2 grids) and 28^2 solves took 10% less CPU time; 4 on large
+//! 8 (callgrind on 28^2 and 256^2 grids) and 28^2 solves took 5-10% less CPU time; 4 on large
 //! ones, where a pop is a chain of dependent loads and cache misses (one per level, each moving
 //! an entry and rewriting its cell's record), so half the levels beat fewer comparisons: CPU
 //! time -9% on 128^3 and -3 to -5% on 1024^2 at second order.
