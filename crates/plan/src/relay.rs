@@ -88,11 +88,9 @@ impl<M: FieldModel> RelayDescent<M> {
         if walk.success || depth == 0 {
             return Ok(walk);
         }
-        if from_field.is_none() {
-            *from_field = Some(self.predict(grid, from)?);
-        }
-        let Some(from_field) = from_field.as_ref() else {
-            unreachable!("predicted just above")
+        let from_field = match from_field {
+            Some(field) => &*field,
+            None => &*from_field.insert(self.predict(grid, from)?),
         };
         // The walk the other way, on the field towards `from`, turned round.
         let reverse = descend(grid, from_field, self.rule, to, from, max_steps);
