@@ -93,8 +93,32 @@ impl<const ARITY: usize> IndexedHeap<ARITY> {
         if first >= n {
             return None;
         }
-        let end = (first + ARITY).min(n);
         let e = &self.entries[..];
+        if ARITY == 4 && first + 4 <= n {
+            // A full node: a tree of compares (two levels) rather than a chain of three, as
+            // the walk down the heap waits on each level's choice.
+            // SAFETY: `first + 4 <= n == e.len()`.
+            let (c0, c1, c2, c3) = unsafe {
+                (
+                    *e.get_unchecked(first),
+                    *e.get_unchecked(first + 1),
+                    *e.get_unchecked(first + 2),
+                    *e.get_unchecked(first + 3),
+                )
+            };
+            let (k01, b01) = if c1 < c0 {
+                (first + 1, c1)
+            } else {
+                (first, c0)
+            };
+            let (k23, b23) = if c3 < c2 {
+                (first + 3, c3)
+            } else {
+                (first + 2, c2)
+            };
+            return Some(if b23 < b01 { (k23, b23) } else { (k01, b01) });
+        }
+        let end = (first + ARITY).min(n);
         let mut best = first;
         // SAFETY: `first < end <= n == e.len()`.
         let mut best_key = unsafe { *e.get_unchecked(first) };
