@@ -266,14 +266,63 @@ impl<const N: usize, const ARITY: usize> Marcher<N, ARITY> {
         let _ = c;
     }
 
+    /// The tentative value of cell `q` when its one accepted neighbour is `q - step`: what
+    /// [`Marcher::estimate`] computes with one finite upwind term, operation for operation,
+    /// without reading the other axes.
+    #[inline(always)]
+    fn estimate_single(&self, q: usize, step: isize) -> f64 {
+        let tau = self.tau(q);
+        let recs = &self.recs[..];
+        // SAFETY: `q` is a real cell, so `q ± 2s` lies inside the two-cell padding.
+        let a = unsafe { recs.get_unchecked(q.wrapping_add_signed(-step)).known as f64 };
+        let first = a + tau;
+        if self.second_order {
+            // SAFETY: as above.
+            let a2 = unsafe { recs.get_unchecked(q.wrapping_add_signed(-2 * step)).known as f64 };
+            if a2 <= a {
+                let u = (4.0 * a - a2) * (1.0 / 3.0) + tau * (2.0 / 3.0);
+                if u >= a {
+                    return u.min(first);
+                }
+            }
+        }
+        first
+    }
+
+    /// Debug builds (the tests): where `q` has exactly one accepted neighbour, the shortcut
+    /// must give the full estimate's value bit for bit.
+    #[cfg(debug_assertions)]
+    fn check_single(&self, q: usize, u: f32) {
+        let accepted = self
+            .strides
+            .iter()
+            .flat_map(|&s| [q - s, q + s])
+            .filter(|&n| self.recs[n].tag == KNOWN)
+            .count();
+        if accepted == 1 {
+            let full = self.estimate(q) as f32;
+            assert_eq!(u.to_bits(), full.to_bits(), "cell {q}: {u} != {full}");
+        }
+    }
+
     #[inline(always)]
     fn update_neighbours(&mut self, i: usize) {
         for k in 0..N {
-            let s = self.strides[k];
-            for q in [i - s, i + s] {
+            let s = self.strides[k] as isize;
+            for step in [-s, s] {
+                let q = i.wrapping_add_signed(step);
                 // SAFETY: neighbours of a real cell lie inside the padding.
                 let tag = unsafe { self.recs.get_unchecked(q).tag };
-                if tag != KNOWN && tag != BLOCKED {
+                if tag == FAR {
+                    // Every accepted cell updates its open neighbours when it is accepted, so
+                    // a cell still far has no accepted neighbour but `i` (source cells, frozen
+                    // together, are the exception: each of them updates its neighbours in turn
+                    // afterwards, and the last update, a full one, sees them all).
+                    let u = self.estimate_single(q, step) as f32;
+                    #[cfg(debug_assertions)]
+                    self.check_single(q, u);
+                    self.heap.set(u, q as u32, &mut self.recs);
+                } else if tag != KNOWN && tag != BLOCKED {
                     let u = self.estimate(q) as f32;
                     self.heap.set(u, q as u32, &mut self.recs);
                 }
