@@ -7,7 +7,9 @@
 //! at most once; a position table lets its value move in either direction (second-order updates
 //! may raise a tentative value). `pop` walks the hole down to a leaf along the smallest
 //! children before sifting the last entry up ("bottom-up" deletion), which saves most
-//! comparisons because the last entry of a front belongs near the bottom. The marcher picks the
+//! comparisons because the last entry of a front belongs near the bottom; in a full 4-ary node
+//! the smallest child comes from a tree of compares (pairs, then their winners), as each level
+//! of that walk waits on the previous one's choice. The marcher picks the
 //! arity by grid size: 2 on small grids, where it runs about 15% fewer instructions than 4 or
 //! 8 (callgrind on 28^2 and 256^2 grids) and 28^2 solves took 5-10% less CPU time; 4 on large
 //! ones, where a pop is a chain of dependent loads and cache misses (one per level, each moving
