@@ -23,22 +23,14 @@ use std::path::Path;
 #[global_allocator]
 static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
-fn model(name: &str) -> Option<std::path::PathBuf> {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("models")
-        .join(name);
-    p.is_file().then_some(p)
-}
-
 fn bench_planners(c: &mut Criterion) {
     let rule = MoveRule::Vin;
     let fmm = FieldDescent::new(FastMarching::default(), rule);
     let graph = FieldDescent::new(GraphDistance::new(Neighbourhood2::Eight(rule)), rule);
     let astar = AStar { rule };
-    let file = |arch: &str, size: usize| {
-        model(&format!("{arch}_{size}.safetensors"))
-            .or_else(|| model(&format!("{arch}.safetensors")))
-    };
+    let models = Path::new(env!("CARGO_MANIFEST_DIR")).join("models");
+    // The model maze_nav picks for the size; a size without one is left out.
+    let file = |arch: &str, size: usize| envfield::nets::model_file(&models, arch, size).ok();
     let net = |p: std::path::PathBuf| FieldNet::load(p).expect("shipped model loads");
     let load = |arch: &str, size: usize| file(arch, size).map(|p| FieldDescent::new(net(p), rule));
     let relay = |size: usize| file("context", size).map(|p| RelayDescent::new(net(p), rule, 1));
@@ -46,8 +38,7 @@ fn bench_planners(c: &mut Criterion) {
         let field = load("context", size);
         let relayed = relay(size);
         let hyper = load("hyper", size);
-        let vin =
-            model(&format!("vin_{size}.safetensors")).map(|p| Vin::load(p).expect("vin loads"));
+        let vin = file("vin", size).map(|p| Vin::load(p).expect("vin loads"));
         let mut planners: Vec<&dyn Planner> = vec![&fmm, &graph, &astar];
         if size <= 28 {
             planners.extend(field.as_ref().map(|p| p as &dyn Planner));

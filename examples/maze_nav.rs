@@ -119,26 +119,15 @@ enum Choice {
     Vin(Box<Vin>),
 }
 
-/// The weights for `arch` on mazes of side `size`: `--model`, else `<arch>_<size>`, else
-/// `<arch>` in models/.
+/// The weights for `arch` on mazes of side `size`: `--model`, else the rule of
+/// [`envfield::nets::model_file`] in models/ (`<arch>_<size>`, else `<arch>`).
 fn model_file(arch: &str, size: usize, explicit: Option<&Path>) -> Result<PathBuf> {
     if let Some(p) = explicit {
         return Ok(p.to_path_buf());
     }
-    let dir = models_dir();
-    let sized = dir.join(format!("{arch}_{size}.safetensors"));
-    let any = dir.join(format!("{arch}.safetensors"));
-    for p in [&sized, &any] {
-        if p.is_file() {
-            return Ok(p.clone());
-        }
-    }
-    bail!(
-        "no {arch} model for {size}x{size} mazes: looked for {} and {} (train one with the \
-         command in README.md, or pass --model)",
-        sized.display(),
-        any.display()
-    )
+    envfield::nets::model_file(models_dir(), arch, size).map_err(|e| {
+        anyhow::anyhow!("{e} (train one with the command in README.md, or pass --model)")
+    })
 }
 
 impl Choice {

@@ -302,12 +302,7 @@ fn shipped_field_model_solves_vin_test_sets() {
     for (n, floor) in [(8, FLOOR_8), (16, FLOOR_16), (28, FLOOR_28)] {
         let Some(path) = vin_file(n) else { return };
         // The model maze_nav picks: context_<n> when it is there, else the all-sizes one.
-        let sized = models.join(format!("context_{n}.safetensors"));
-        let file = if sized.is_file() {
-            sized
-        } else {
-            models.join("context.safetensors")
-        };
+        let file = envfield::nets::model_file(&models, "context", n).unwrap();
         let net = envfield::nets::FieldNet::load(&file).unwrap();
         let planner = FieldDescent::new(&net, MoveRule::Vin);
         let relay = RelayDescent::new(&net, MoveRule::Vin, 1);

@@ -49,6 +49,16 @@ pub enum NetsError {
         /// The tensor.
         name: String,
     },
+    /// No weight file of a model family for a maze size (see [`crate::model_file`]).
+    #[error("no {name} model for {size}x{size} mazes: looked for {}", display_paths(.looked))]
+    ModelNotFound {
+        /// The model family.
+        name: String,
+        /// The maze side.
+        size: usize,
+        /// The files looked for, in order.
+        looked: Vec<PathBuf>,
+    },
     /// Training diverged (a loss that is not finite).
     #[error("training diverged at step {step}: loss {loss}")]
     Diverged {
@@ -70,3 +80,11 @@ pub enum NetsError {
 
 /// The result type of envfield-nets.
 pub type Result<T, E = NetsError> = std::result::Result<T, E>;
+
+fn display_paths(paths: &[PathBuf]) -> String {
+    paths
+        .iter()
+        .map(|p| p.display().to_string())
+        .collect::<Vec<_>>()
+        .join(" and ")
+}

@@ -14,7 +14,7 @@
 //! - [`Vin`]: the Value Iteration Network baseline (Tamar et al. 2016), trained by imitation
 //!   ([`VinTrainer`]), and a [`Planner`](envfield_plan::Planner) that runs it at every step.
 //! - Weight files carry their config: [`FieldNet::load`] rebuilds the network, checking every
-//!   tensor's name and shape.
+//!   tensor's name and shape; [`model_file`] picks a family's file for a maze size.
 //!
 //! Convolutions run channels-last as a gather (im2col) and one matrix multiply, which on a
 //! CPU is several times faster than candle's direct convolution, forward and backward.
@@ -31,6 +31,7 @@
 //! ```
 
 mod error;
+mod files;
 mod kernel;
 mod layers;
 mod model;
@@ -40,6 +41,7 @@ mod vin;
 
 pub use envfield_grid::FieldModel;
 pub use error::{NetsError, Result};
+pub use files::model_file;
 pub use layers::{Activation, ConvSpec, MlpConfig};
 pub use model::{
     prediction_to_distance, Batch, BoundField, ContextConfig, FieldNet, GoalConfig, HyperConfig,
