@@ -42,6 +42,18 @@ pub enum EikonalError {
         /// The grid's shape, formatted.
         grid: String,
     },
+    /// The grid has more cells than fast marching can index: cell numbers and heap positions
+    /// are 32-bit (about 4.29 billion cells, counting a two-cell padding on every side).
+    #[error(
+        "the {shape} grid is too large for fast marching: with a two-cell padding on every \
+         side it needs more than {limit} cells"
+    )]
+    GridTooLarge {
+        /// The grid's shape, formatted.
+        shape: String,
+        /// The most padded cells a solve can index.
+        limit: usize,
+    },
     /// A solver setting is out of range.
     #[error("invalid solver setting: {0}")]
     InvalidConfig(String),

@@ -1,4 +1,4 @@
-use crate::march::{march, Problem};
+use crate::march::{check_size, march, Problem};
 use crate::sources::check_sources;
 use crate::{EikonalError, Result};
 use envfield_grid::{Cell2, Cell3, Field2, Field3, FieldModel, Grid2, Grid3};
@@ -144,7 +144,8 @@ impl FastMarching {
     /// # Errors
     /// [`EikonalError::NoSources`], [`EikonalError::SourceOutside`],
     /// [`EikonalError::SourceOnObstacle`], [`EikonalError::NoFreeCell`],
-    /// [`EikonalError::InvalidConfig`].
+    /// [`EikonalError::InvalidConfig`], and [`EikonalError::GridTooLarge`] past about 4.29
+    /// billion cells (65532² or 1620³).
     pub fn solve2(&self, grid: &Grid2, sources: &[Cell2]) -> Result<Field2> {
         self.solve2_with(grid, sources, SolveOptions2::default())
     }
@@ -163,6 +164,7 @@ impl FastMarching {
     ) -> Result<Field2> {
         self.validate()?;
         let shape = format!("{}x{}", grid.rows(), grid.cols());
+        check_size([grid.rows(), grid.cols()], &shape)?;
         if !grid.obstacles().contains(&false) {
             return Err(EikonalError::NoFreeCell);
         }
@@ -220,6 +222,7 @@ impl FastMarching {
         self.validate()?;
         let [nx, ny, nz] = grid.shape();
         let shape = format!("{nx}x{ny}x{nz}");
+        check_size(grid.shape(), &shape)?;
         if !grid.obstacles().contains(&false) {
             return Err(EikonalError::NoFreeCell);
         }

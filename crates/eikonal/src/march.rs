@@ -342,6 +342,24 @@ fn sort3(a: f64, b: f64, c: f64) -> (f64, f64, f64) {
 /// Padded grids from this many cells on use the 4-ary heap (see `heap`) and prefetch.
 const LARGE_GRID: usize = 1 << 16;
 
+/// The most cells a padded grid may have: cells and heap positions are stored as `u32`, and the
+/// three state tags take the values above this.
+pub(crate) const MAX_PADDED_CELLS: usize = KNOWN as usize;
+
+/// Whether a grid of `dims` (formatted as `shape` in the error) fits [`MAX_PADDED_CELLS`].
+pub(crate) fn check_size<const N: usize>(dims: [usize; N], shape: &str) -> crate::Result<()> {
+    let padded = dims
+        .iter()
+        .try_fold(1usize, |acc, &d| acc.checked_mul(d.checked_add(2 * PAD)?));
+    match padded {
+        Some(n) if n <= MAX_PADDED_CELLS => Ok(()),
+        _ => Err(crate::EikonalError::GridTooLarge {
+            shape: shape.to_string(),
+            limit: MAX_PADDED_CELLS,
+        }),
+    }
+}
+
 /// Runs fast marching and returns the C-order values (f32; infinity where not reached).
 pub(crate) fn march<const N: usize>(p: &Problem<'_, N>) -> Vec<f32> {
     let lat = Lattice::new(p.dims);
@@ -477,5 +495,22 @@ fn line_of_sight<const N: usize>(
             }
             idx[k] = lo[k];
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn grids_past_32_bit_cell_numbers_are_refused() {
+        assert!(check_size([1024, 1024], "1024x1024").is_ok());
+        assert!(check_size([1620, 1620, 1620], "1620^3").is_ok());
+        // (65532 + 4)^2 = 2^32 padded cells, above the limit of 2^32 - 3.
+        let err = check_size([65532, 65532], "65532x65532").unwrap_err();
+        assert!(err.to_string().contains("65532x65532"), "{err}");
+        assert!(check_size([65528, 65532], "").is_ok()); // 65532 * 65536 = 2^32 - 2^18
+        assert!(check_size([1630, 1630, 1630], "").is_err());
+        assert!(check_size([usize::MAX, 2], "").is_err()); // overflow is an error too
     }
 }
