@@ -19,6 +19,7 @@ use std::path::{Path, PathBuf};
 /// let picked = envfield_nets::model_file(&dir, "context", 28)?;
 /// assert_eq!(picked, dir.join("context.safetensors"));
 /// assert!(envfield_nets::model_file(&dir, "hyper", 28).is_err());
+/// # std::fs::remove_dir_all(&dir)?;
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 pub fn model_file(dir: impl AsRef<Path>, name: &str, size: usize) -> Result<PathBuf> {
