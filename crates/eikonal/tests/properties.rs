@@ -192,3 +192,136 @@ fn exact_fields_are_symmetric_so_averaging_views_changes_nothing() {
     }
     assert!(Symmetric::new(GraphDistance::new(Neighbourhood2::Four), 9).is_err());
 }
+
+/// Speed maps (with never-entered zero-speed cells), several sources and every source radius,
+/// in 2D and 3D, both orders: sources are 0, enterable cells are finite exactly when the
+/// 4- (6-) connected graph over enterable cells reaches them, and a first-order travel time is
+/// never below the straight line to the nearest source at the fastest speed. In debug builds the marcher
+/// also checks its one-neighbour shortcut against the full estimate on every such cell.
+#[test]
+fn speed_maps_and_several_sources() {
+    runner(60)
+        .run(
+            &(
+                (3usize..20, 3usize..20, 0usize..3),
+                (0.0f64..0.35, 0.0f64..0.15),
+                (1usize..5, 0usize..3, any::<bool>()),
+                any::<u64>(),
+            ),
+            |((r, c, depth), (frac, zero_frac), (n_src, radius, second), seed)| {
+                let mut rng = SplitMix64::new(seed ^ 0x5EED);
+                let mut unit = || rng.next_f64();
+                let three_d = depth > 0;
+                let shape = [r, c, if three_d { 2 + depth * 3 } else { 1 }];
+                let len = shape.iter().product::<usize>();
+                let obstacles: Vec<bool> = (0..len).map(|_| unit() < frac).collect();
+                let speed: Vec<f32> = (0..len)
+                    .map(|_| {
+                        if unit() < zero_frac {
+                            0.0
+                        } else {
+                            (0.2 + 2.8 * unit()) as f32
+                        }
+                    })
+                    .collect();
+                let enterable: Vec<bool> =
+                    (0..len).map(|i| !obstacles[i] && speed[i] > 0.0).collect();
+                let open: Vec<usize> = (0..len).filter(|&i| enterable[i]).collect();
+                if open.is_empty() {
+                    return Ok(());
+                }
+                let mut src_idx: Vec<usize> = (0..n_src)
+                    .map(|k| open[(seed as usize).wrapping_add(k * 7919) % open.len()])
+                    .collect();
+                src_idx.sort_unstable();
+                src_idx.dedup();
+                let fmm = FastMarching {
+                    order: if second { Order::Second } else { Order::First },
+                    source_radius: radius,
+                    ..FastMarching::default()
+                };
+                let blocked: Vec<bool> = enterable.iter().map(|&e| !e).collect();
+                let (values, reach, centres): (Vec<f32>, Vec<f32>, Vec<[f64; 3]>) = if three_d {
+                    let g = envfield_grid::Grid3::from_obstacles(shape, obstacles.clone()).unwrap();
+                    let sp = envfield_grid::Field3::new(shape, speed.clone()).unwrap();
+                    let srcs: Vec<Cell3> = src_idx.iter().map(|&i| g.cell(i)).collect();
+                    let f = fmm
+                        .solve3_with(
+                            &g,
+                            &srcs,
+                            envfield_eikonal::SolveOptions3 {
+                                speed: Some(&sp),
+                                stop_at: None,
+                            },
+                        )
+                        .unwrap();
+                    let gb = envfield_grid::Grid3::from_obstacles(shape, blocked).unwrap();
+                    let b = bfs3(&gb, &srcs, Neighbourhood3::Six).unwrap();
+                    let centres = (0..len)
+                        .map(|i| {
+                            let p = g.cell(i);
+                            [p.x as f64, p.y as f64, p.z as f64]
+                        })
+                        .collect();
+                    (f.values().to_vec(), b.values().to_vec(), centres)
+                } else {
+                    let g = Grid2::from_obstacles(r, c, obstacles.clone()).unwrap();
+                    let sp = envfield_grid::Field2::new(r, c, speed.clone()).unwrap();
+                    let srcs: Vec<Cell2> = src_idx.iter().map(|&i| g.cell(i)).collect();
+                    let f = fmm
+                        .solve2_with(
+                            &g,
+                            &srcs,
+                            envfield_eikonal::SolveOptions2 {
+                                speed: Some(&sp),
+                                stop_at: None,
+                            },
+                        )
+                        .unwrap();
+                    let gb = Grid2::from_obstacles(r, c, blocked).unwrap();
+                    let b = bfs2(&gb, &srcs, Neighbourhood2::Four).unwrap();
+                    let centres = (0..len)
+                        .map(|i| {
+                            let p = g.cell(i);
+                            [p.row as f64, p.col as f64, 0.0]
+                        })
+                        .collect();
+                    (f.values().to_vec(), b.values().to_vec(), centres)
+                };
+                let fastest = speed.iter().cloned().fold(0.0f32, f32::max) as f64;
+                for &s in &src_idx {
+                    prop_assert_eq!(values[s], 0.0);
+                }
+                for i in 0..len {
+                    let v = values[i];
+                    if !enterable[i] {
+                        prop_assert!(v.is_infinite(), "cell {} is never entered but has {}", i, v);
+                        continue;
+                    }
+                    prop_assert_eq!(v.is_finite(), reach[i].is_finite(), "cell {}", i);
+                    prop_assert!(v >= 0.0);
+                    if v.is_finite() && !second {
+                        let line = src_idx
+                            .iter()
+                            .map(|&s| {
+                                let (a, b) = (centres[i], centres[s]);
+                                ((a[0] - b[0]).powi(2)
+                                    + (a[1] - b[1]).powi(2)
+                                    + (a[2] - b[2]).powi(2))
+                                .sqrt()
+                            })
+                            .fold(f64::INFINITY, f64::min);
+                        prop_assert!(
+                            v as f64 >= line / fastest - 1e-4,
+                            "cell {}: {} below {}",
+                            i,
+                            v,
+                            line / fastest
+                        );
+                    }
+                }
+                Ok(())
+            },
+        )
+        .unwrap();
+}
