@@ -30,18 +30,19 @@ struct Lattice<const N: usize> {
 }
 
 impl<const N: usize> Lattice<N> {
-    fn new(dims: [usize; N]) -> Self {
+    /// The padded lattice of a grid of `dims`, or `None` past [`MAX_PADDED_CELLS`].
+    fn new(dims: [usize; N]) -> Option<Self> {
         let mut strides = [0; N];
-        let mut acc = 1;
+        let mut acc = 1usize;
         for k in (0..N).rev() {
             strides[k] = acc;
-            acc *= dims[k] + 2 * PAD;
+            acc = acc.checked_mul(dims[k].checked_add(2 * PAD)?)?;
         }
-        Self {
+        (acc <= MAX_PADDED_CELLS).then_some(Self {
             dims,
             strides,
             len: acc,
-        }
+        })
     }
 
     #[inline]
@@ -344,25 +345,24 @@ const LARGE_GRID: usize = 1 << 16;
 
 /// The most cells a padded grid may have: cells and heap positions are stored as `u32`, and the
 /// three state tags take the values above this.
-pub(crate) const MAX_PADDED_CELLS: usize = KNOWN as usize;
+const MAX_PADDED_CELLS: usize = KNOWN as usize;
 
-/// Whether a grid of `dims` (formatted as `shape` in the error) fits [`MAX_PADDED_CELLS`].
+/// Whether a grid of `dims` (formatted as `shape` in the error) fits [`MAX_PADDED_CELLS`]:
+/// whether [`march`] can lay it out.
 pub(crate) fn check_size<const N: usize>(dims: [usize; N], shape: &str) -> crate::Result<()> {
-    let padded = dims
-        .iter()
-        .try_fold(1usize, |acc, &d| acc.checked_mul(d.checked_add(2 * PAD)?));
-    match padded {
-        Some(n) if n <= MAX_PADDED_CELLS => Ok(()),
-        _ => Err(crate::EikonalError::GridTooLarge {
+    match Lattice::new(dims) {
+        Some(_) => Ok(()),
+        None => Err(crate::EikonalError::GridTooLarge {
             shape: shape.to_string(),
             limit: MAX_PADDED_CELLS,
         }),
     }
 }
 
-/// Runs fast marching and returns the C-order values (f32; infinity where not reached).
+/// Runs fast marching and returns the C-order values (f32; infinity where not reached). The
+/// caller has checked the grid's size with [`check_size`].
 pub(crate) fn march<const N: usize>(p: &Problem<'_, N>) -> Vec<f32> {
-    let lat = Lattice::new(p.dims);
+    let lat = Lattice::new(p.dims).expect("the solver checks the grid's size first");
     if lat.len >= LARGE_GRID {
         march_with::<N, 4>(p, lat)
     } else {
