@@ -12,11 +12,10 @@
 #![allow(missing_docs)]
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use envfield::eikonal::{FastMarching, GraphDistance};
-use envfield::grid::{MoveRule, Neighbourhood2};
+use envfield::grid::MoveRule;
 use envfield::mazes::{evaluation_pairs, GeneratorKind, MazeGenerator};
-use envfield::nets::{FieldNet, Vin};
-use envfield::plan::{AStar, FieldDescent, Planner, RelayDescent};
+use envfield::models::ModelSource;
+use envfield::plan::{NamedPlanner, PlannerKind, PlannerOptions};
 use std::hint::black_box;
 use std::path::Path;
 
@@ -24,35 +23,41 @@ use std::path::Path;
 static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 fn bench_planners(c: &mut Criterion) {
-    let rule = MoveRule::Vin;
-    let fmm = FieldDescent::new(FastMarching::default(), rule);
-    let graph = FieldDescent::new(GraphDistance::new(Neighbourhood2::Eight(rule)), rule);
-    let astar = AStar { rule };
-    let models = Path::new(env!("CARGO_MANIFEST_DIR")).join("models");
-    // The model maze_nav picks for the size; a size without one is left out.
-    let file = |arch: &str, size: usize| envfield::nets::model_file(&models, arch, size).ok();
-    let net = |p: std::path::PathBuf| FieldNet::load(p).expect("shipped model loads");
-    let load = |arch: &str, size: usize| file(arch, size).map(|p| FieldDescent::new(net(p), rule));
-    let relay = |size: usize| file("context", size).map(|p| RelayDescent::new(net(p), rule, 1));
+    let options = PlannerOptions {
+        rule: MoveRule::Vin,
+        ..PlannerOptions::default()
+    };
+    let source = ModelSource::new(Path::new(env!("CARGO_MANIFEST_DIR")).join("models"));
+    // The planners maze_nav builds by these names, with the models it picks for the size; a
+    // learned planner without a model for the size is left out, and the learned fields are
+    // timed up to 28x28 (VIN at every size).
+    let kinds = [
+        PlannerKind::Fmm,
+        PlannerKind::Graph,
+        PlannerKind::AStar,
+        PlannerKind::Field,
+        PlannerKind::Relay,
+        PlannerKind::Hyper,
+        PlannerKind::Vin,
+    ];
     for size in [8usize, 16, 28, 64] {
-        let field = load("context", size);
-        let relayed = relay(size);
-        let hyper = load("hyper", size);
-        let vin = file("vin", size).map(|p| Vin::load(p).expect("vin loads"));
-        let mut planners: Vec<&dyn Planner> = vec![&fmm, &graph, &astar];
-        if size <= 28 {
-            planners.extend(field.as_ref().map(|p| p as &dyn Planner));
-            planners.extend(relayed.as_ref().map(|p| p as &dyn Planner));
-            planners.extend(hyper.as_ref().map(|p| p as &dyn Planner));
-        }
-        planners.extend(vin.as_ref().map(|p| p as &dyn Planner));
+        let planners: Vec<NamedPlanner> = kinds
+            .iter()
+            .filter(|k| size <= 28 || !matches!(k.model_family(), Some("context" | "hyper")))
+            .filter_map(|k| {
+                k.build(&options, |family| {
+                    source.load(family, size).map_err(anyhow::Error::from)
+                })
+                .ok()
+            })
+            .collect();
         let mazes = MazeGenerator::new(GeneratorKind::Gridworld, size)
             .expect("size")
             .generate_many(50, 1)
             .expect("mazes");
-        let pairs = evaluation_pairs(&mazes, rule, 2, 1).expect("pairs");
+        let pairs = evaluation_pairs(&mazes, options.rule, 2, 1).expect("pairs");
         let mut group = c.benchmark_group(format!("maze_planning_{size}"));
-        for &p in &planners {
+        for p in planners.iter().map(NamedPlanner::planner) {
             group.bench_function(BenchmarkId::new(p.name(), size), |b| {
                 let mut k = 0;
                 b.iter(|| {

@@ -6,43 +6,19 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use envfield_grid::{FieldModel, MoveRule};
 use envfield_mazes::{Dataset, DatasetConfig, GeneratorKind, MazeGenerator, TargetKind};
-use envfield_nets::{
-    ContextConfig, FieldNet, GoalConfig, HyperConfig, MlpConfig, ModelConfig, PlainConfig,
-    TargetEncoding, TrainConfig, Trainer,
-};
+use envfield_nets::{Arch, FieldNet, ModelConfig, TargetEncoding, TrainConfig, Trainer};
 
 #[global_allocator]
 static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
-fn configs(extent: Vec<usize>, goal: Vec<usize>) -> Vec<(ModelConfig, usize, usize)> {
-    let mlp = MlpConfig {
-        hidden: 128,
-        layers: 4,
-        fourier: 4,
-        ..MlpConfig::default()
-    };
+/// The presets `train_maze` trains, with the batch it trains each on (items, queries).
+fn configs(goal: [usize; 2]) -> Vec<(ModelConfig, usize, usize)> {
+    let preset = |arch: Arch| arch.preset(28, 28, goal, TargetEncoding::Reciprocal);
     vec![
-        (
-            ModelConfig::Plain(PlainConfig {
-                extent: extent.clone(),
-                goal,
-                mlp,
-                encoding: TargetEncoding::Reciprocal,
-            }),
-            1,
-            784,
-        ),
-        (
-            ModelConfig::Goal(GoalConfig {
-                extent,
-                mlp,
-                encoding: TargetEncoding::Reciprocal,
-            }),
-            32,
-            256,
-        ),
-        (ModelConfig::Context(ContextConfig::default()), 32, 256),
-        (ModelConfig::Hyper(HyperConfig::default()), 32, 256),
+        (preset(Arch::Plain), 1, 784),
+        (preset(Arch::Goal), 32, 256),
+        (preset(Arch::Context), 32, 256),
+        (preset(Arch::Hyper), 32, 256),
     ]
 }
 
@@ -62,7 +38,7 @@ fn bench(c: &mut Criterion) {
     };
     let mut train = c.benchmark_group("train_step");
     train.sample_size(10);
-    for (cfg, items, queries) in configs(vec![28, 28], vec![s.goal.row, s.goal.col]) {
+    for (cfg, items, queries) in configs([s.goal.row, s.goal.col]) {
         let arch = cfg.arch();
         let tc = TrainConfig {
             lr: 1e-4,
@@ -87,7 +63,7 @@ fn bench(c: &mut Criterion) {
     }
     train.finish();
     let mut infer = c.benchmark_group("field_28");
-    for (cfg, _, _) in configs(vec![28, 28], vec![s.goal.row, s.goal.col]) {
+    for (cfg, _, _) in configs([s.goal.row, s.goal.col]) {
         let arch = cfg.arch();
         let net = FieldNet::new(cfg, 0).unwrap();
         infer.bench_function(arch, |b| b.iter(|| net.predict(&s.grid, s.goal).unwrap()));

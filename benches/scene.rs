@@ -11,7 +11,7 @@ use envfield::affordance::{
     align_to_trajectory, check_pose, check_sequence, standing_pose, walk, AffordanceConfig,
     Support, WalkConfig,
 };
-use envfield::grid::synth::SplitMix64;
+use envfield::grid::SplitMix64;
 use envfield::scene::nalgebra::{Point3, Vector3};
 use envfield::scene::{floor_map, generate_room, FloorMapConfig, RoomConfig};
 use std::hint::black_box;

@@ -1,4 +1,4 @@
-//! Generates a dataset of (maze, goal, target) samples, prints how long it took, and
+//! Generates a dataset of (maze, goal, exact distance field) samples, prints how long it took, and
 //! optionally saves it as `.npy` files.
 //!
 //! ```text
@@ -8,8 +8,6 @@
 
 use anyhow::Result;
 use clap::Parser;
-use envfield::eikonal::Order;
-use envfield::grid::MoveRule;
 use envfield::mazes::{Dataset, DatasetConfig, GeneratorKind, MazeGenerator, TargetKind};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -19,7 +17,7 @@ use std::time::Instant;
 struct Args {
     /// gridworld, crossings, rooms or perfect.
     #[arg(long, default_value = "gridworld")]
-    generator: String,
+    generator: GeneratorKind,
     /// Maze side.
     #[arg(long, default_value_t = 28)]
     size: usize,
@@ -31,7 +29,7 @@ struct Args {
     goals_per_maze: usize,
     /// Target: fmm1, fmm2, strict or vin (graph distance under that rule).
     #[arg(long, default_value = "vin")]
-    target: String,
+    target: TargetKind,
     /// Fraction of free cells turned into extra obstacles.
     #[arg(long, default_value_t = 0.0)]
     extra_obstacles: f32,
@@ -45,16 +43,11 @@ struct Args {
 
 fn main() -> Result<()> {
     let args = Args::parse();
-    let target = match args.target.as_str() {
-        "fmm1" => TargetKind::FastMarching(Order::First),
-        "fmm2" => TargetKind::FastMarching(Order::Second),
-        rule => TargetKind::Graph(rule.parse::<MoveRule>()?),
-    };
     let cfg = DatasetConfig {
-        generator: MazeGenerator::new(args.generator.parse::<GeneratorKind>()?, args.size)?,
+        generator: MazeGenerator::new(args.generator, args.size)?,
         mazes: args.samples.div_ceil(args.goals_per_maze.max(1)),
         goals_per_maze: args.goals_per_maze,
-        target,
+        target: args.target,
         extra_obstacles: args.extra_obstacles,
         seed: args.seed,
     };

@@ -1,4 +1,5 @@
-//! Navigate mazes with a planner and report DESIGN.md's metrics.
+//! Navigate mazes with planners and report the evaluation protocol's figures
+//! (`docs/evaluation.md`).
 //!
 //! With no arguments it runs the shipped models: the learned field (`models/context.safetensors`)
 //! and VIN (`models/vin_{8,16,28}.safetensors`, picked by maze size) beside A* and fast
@@ -11,18 +12,18 @@
 //! cargo run --release --example maze_nav -- --generator perfect --size 41 --count 50 --png out.png --paths paths.json
 //! ```
 
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result};
 use clap::Parser;
-use envfield::eikonal::{FastMarching, GraphDistance};
+use envfield::eikonal::GraphDistance;
 use envfield::grid::{
-    write_atomic, Cell2, Ensemble, FieldModel, HeatMapStyle, Maze, MoveRule, Neighbourhood2,
-    Symmetric,
+    write_atomic, Cell2, FieldModel, HeatMapStyle, Maze, MoveRule, Neighbourhood2,
 };
 use envfield::mazes::{GeneratorKind, MazeGenerator};
-use envfield::nets::{FieldNet, Vin};
+use envfield::models::ModelSource;
+use envfield::nets::NetsError;
 use envfield::plan::{
-    evaluate, AStar, DecisionProfile, EvalConfig, FieldDescent, Octile, Planner, RelayDescent,
-    Report,
+    evaluate, AStar, DecisionProfile, EvalConfig, NamedPlanner, Planner, PlannerKind,
+    PlannerOptions, Report,
 };
 use std::path::{Path, PathBuf};
 
@@ -52,7 +53,7 @@ struct Args {
     mazes: Option<PathBuf>,
     /// Generator: gridworld, crossings, rooms or perfect.
     #[arg(long, default_value = "gridworld")]
-    generator: String,
+    generator: GeneratorKind,
     /// Side of generated mazes. Without --mazes or --size, runs the default suite: VIN's test
     /// sets (8, 16, 28) when ../shared/data/vin is there, generated mazes of those sizes if not.
     #[arg(long)]
@@ -68,8 +69,12 @@ struct Args {
     /// --relays), octile and octile-relay (the octile distance, blind to walls: the control),
     /// hyper (the hypernetwork field), vin (the VIN baseline, one network pass per step), fmm
     /// (fast-marching field descent), graph (exact graph-distance field descent), astar.
-    #[arg(long, default_value = "field,relay,octile-relay,vin,astar,fmm")]
-    planner: String,
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "field,relay,octile-relay,vin,astar,fmm"
+    )]
+    planner: Vec<PlannerKind>,
     /// For `relay`: how many times a failing descent may be split in two at the cell where
     /// the start's and the goal's predicted fields meet (each split, one more prediction).
     #[arg(long, default_value_t = 1)]
@@ -91,7 +96,7 @@ struct Args {
     views: usize,
     /// Move rule: strict or vin.
     #[arg(long, default_value = "vin")]
-    rule: String,
+    rule: MoveRule,
     /// Random pairs per maze (mazes with both S and G use that pair).
     #[arg(long, default_value_t = 1)]
     pairs: usize,
@@ -111,98 +116,6 @@ struct Args {
     paths: Option<PathBuf>,
 }
 
-/// The planners maze_nav knows, with their field models kept for pictures.
-enum Choice {
-    Field(FieldDescent<Box<dyn FieldModel + Send + Sync>>),
-    Relay(RelayDescent<Box<dyn FieldModel + Send + Sync>>),
-    AStar(AStar),
-    Vin(Box<Vin>),
-}
-
-/// The weights for `arch` on mazes of side `size`: `--model`, else the rule of
-/// [`envfield::nets::model_file`] in models/ (`<arch>_<size>`, else `<arch>`).
-fn model_file(arch: &str, size: usize, explicit: Option<&Path>) -> Result<PathBuf> {
-    if let Some(p) = explicit {
-        return Ok(p.to_path_buf());
-    }
-    envfield::nets::model_file(models_dir(), arch, size).map_err(|e| {
-        anyhow::anyhow!("{e} (train one with the command in README.md, or pass --model)")
-    })
-}
-
-impl Choice {
-    fn parse(name: &str, rule: MoveRule, size: usize, args: &Args) -> Result<Self> {
-        let (model, views) = (args.model.as_deref(), args.views);
-        // `relay` and `octile-relay` are `field` and `octile` planned with relays.
-        let (base, relayed) = match name {
-            "relay" => ("field", true),
-            "octile-relay" => ("octile", true),
-            other => (other, false),
-        };
-        let model: Box<dyn FieldModel + Send + Sync> = match base {
-            "fmm" => Box::new(FastMarching::default()),
-            "octile" => Box::new(Octile),
-            "graph" => Box::new(GraphDistance::new(Neighbourhood2::Eight(rule))),
-            "astar" => return Ok(Choice::AStar(AStar { rule })),
-            "field" | "hyper" => {
-                let arch = if name == "hyper" { "hyper" } else { "context" };
-                let file = model_file(arch, size, model)?;
-                // Several comma-separated files: an ensemble, the mean of their fields.
-                let mut nets = file
-                    .to_string_lossy()
-                    .split(',')
-                    .map(|f| FieldNet::load(f).with_context(|| format!("loading {f}")))
-                    .collect::<Result<Vec<_>>>()?;
-                let learned: Box<dyn FieldModel + Send + Sync> = match nets.len() {
-                    1 => Box::new(nets.remove(0)),
-                    _ => Box::new(Ensemble::new(nets)?),
-                };
-                if views == 1 {
-                    learned
-                } else {
-                    Box::new(Symmetric::new(learned, views)?)
-                }
-            }
-            "vin" => {
-                let file = match model.filter(|p| Vin::load(p).is_ok()) {
-                    Some(p) => p.to_path_buf(),
-                    None => model_file("vin", size, None)?,
-                };
-                let vin =
-                    Vin::load(&file).with_context(|| format!("loading {}", file.display()))?;
-                return Ok(Choice::Vin(Box::new(vin)));
-            }
-            _ => {
-                bail!("unknown planner {name:?} (expected field, relay, octile, octile-relay, hyper, vin, fmm, graph or astar)")
-            }
-        };
-        Ok(if relayed {
-            let mut relay = RelayDescent::new(model, rule, args.relays);
-            relay.candidates = args.candidates;
-            Choice::Relay(relay)
-        } else {
-            Choice::Field(FieldDescent::new(model, rule))
-        })
-    }
-
-    fn planner(&self) -> &dyn Planner {
-        match self {
-            Choice::Field(p) => p,
-            Choice::Relay(p) => p,
-            Choice::AStar(p) => p,
-            Choice::Vin(p) => p.as_ref(),
-        }
-    }
-
-    fn field_model(&self) -> Option<&dyn FieldModel> {
-        match self {
-            Choice::Field(p) => Some(p.model.as_ref()),
-            Choice::Relay(p) => Some(p.model.as_ref()),
-            Choice::AStar(_) | Choice::Vin(_) => None,
-        }
-    }
-}
-
 struct Suite {
     label: String,
     mazes: Vec<Maze>,
@@ -210,7 +123,7 @@ struct Suite {
 
 fn draw(
     path: &PathBuf,
-    choice: &Choice,
+    choice: &NamedPlanner,
     mazes: &[Maze],
     report: &Report,
     rule: MoveRule,
@@ -271,8 +184,7 @@ fn print_profile(label: &str, planner: &str, p: &DecisionProfile, json: bool) ->
 
 fn main() -> Result<()> {
     let args = Args::parse();
-    let rule: MoveRule = args.rule.parse()?;
-    let kind: GeneratorKind = args.generator.parse()?;
+    let (rule, kind) = (args.rule, args.generator);
     let suites: Vec<Suite> = match (&args.mazes, args.size) {
         (Some(file), _) => vec![Suite {
             label: file
@@ -308,7 +220,16 @@ fn main() -> Result<()> {
             })
             .collect::<Result<_>>()?,
     };
-    let names: Vec<&str> = args.planner.split(',').map(str::trim).collect();
+    let options = PlannerOptions {
+        rule,
+        relays: args.relays,
+        candidates: args.candidates,
+    };
+    let source = ModelSource {
+        explicit: args.model.clone(),
+        views: args.views,
+        ..ModelSource::new(models_dir())
+    };
     let cfg = EvalConfig {
         rule,
         pairs_per_maze: args.pairs,
@@ -322,9 +243,19 @@ fn main() -> Result<()> {
             .mazes
             .first()
             .map_or(0, |m| m.grid.rows().max(m.grid.cols()));
-        let choices: Vec<Choice> = names
+        let choices: Vec<NamedPlanner> = args
+            .planner
             .iter()
-            .map(|n| Choice::parse(n, rule, size, &args))
+            .map(|kind| {
+                kind.build(&options, |family| {
+                    source.load(family, size).map_err(|e| match e {
+                        NetsError::ModelNotFound { .. } => anyhow::anyhow!(
+                            "{e} (train one with the command in models/README.md, or pass --model)"
+                        ),
+                        other => other.into(),
+                    })
+                })
+            })
             .collect::<Result<_>>()?;
         for choice in &choices {
             let bar = indicatif::ProgressBar::new(0).with_message(format!(

@@ -11,12 +11,10 @@
 
 use anyhow::{bail, Context, Result};
 use clap::Parser;
-use envfield::eikonal::Order;
-use envfield::grid::MoveRule;
 use envfield::mazes::{Dataset, DatasetConfig, GeneratorKind, MazeGenerator, TargetKind};
 use envfield::nets::{
-    ContextConfig, ConvSpec, FieldNet, GoalConfig, HyperConfig, MlpConfig, ModelConfig,
-    PlainConfig, PropagationConfig, TargetEncoding, TrainConfig, Trainer,
+    parse_convs, Arch, DataCheck, FieldNet, ModelConfig, PropagationConfig, TargetEncoding,
+    TrainConfig, Trainer,
 };
 use envfield::plan::{evaluate, EvalConfig, FieldDescent};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -30,10 +28,10 @@ static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 struct Args {
     /// plain, goal, context or hyper.
     #[arg(long, default_value = "context")]
-    arch: String,
+    arch: Arch,
     /// gridworld, crossings, rooms or perfect.
     #[arg(long, default_value = "gridworld")]
-    generator: String,
+    generator: GeneratorKind,
     /// Maze side, or several separated by commas (one model for all).
     #[arg(long, default_value = "28")]
     size: String,
@@ -45,7 +43,7 @@ struct Args {
     goals_per_maze: usize,
     /// Target field: vin or strict (graph distance under that rule), fmm1 or fmm2.
     #[arg(long, default_value = "vin")]
-    target: String,
+    target: TargetKind,
     /// Total optimiser steps.
     #[arg(long, default_value_t = 20_000)]
     steps: u64,
@@ -83,7 +81,7 @@ struct Args {
     eval_mazes: usize,
     /// Output encoding: `reciprocal` (the paper's 1/(1+d)) or `linear:SCALE` (1 - d/SCALE).
     #[arg(long, default_value = "reciprocal")]
-    encoding: String,
+    encoding: TargetEncoding,
     /// Context encoder convolutions as CHANNELS:DILATION, comma-separated, `Nx[...]` repeating
     /// a group (`16:1,8x[16:1,16:2,16:4,16:8],32:1`: 34 convolutions). Default: the library's
     /// 11-layer dilated encoder.
@@ -146,65 +144,9 @@ struct Args {
     every: u64,
 }
 
-fn target_kind(s: &str) -> Result<TargetKind> {
-    Ok(match s {
-        "fmm1" => TargetKind::FastMarching(Order::First),
-        "fmm2" => TargetKind::FastMarching(Order::Second),
-        rule => TargetKind::Graph(rule.parse::<MoveRule>()?),
-    })
-}
-
-fn encoding(s: &str) -> Result<TargetEncoding> {
-    Ok(match s.split_once(':') {
-        None if s == "reciprocal" => TargetEncoding::Reciprocal,
-        Some(("linear", scale)) => TargetEncoding::Linear {
-            scale: scale
-                .parse()
-                .with_context(|| format!("bad linear scale `{scale}`"))?,
-        },
-        _ => bail!("unknown --encoding `{s}` (reciprocal or linear:SCALE)"),
-    })
-}
-
-/// Convolutions from `CHANNELS:DILATION` items, comma-separated, where `Nx[ITEMS]` repeats a
-/// group N times: `16:1,8x[16:1,16:2,16:4,16:8],32:1` is 34 convolutions.
-fn encoder(spec: &str) -> Result<Vec<ConvSpec>> {
-    let mut out = Vec::new();
-    let mut rest = spec.trim();
-    while !rest.is_empty() {
-        let item_end = match rest.find('[') {
-            Some(open) if rest[..open].find(',').is_none() => {
-                let close = rest.find(']').context("`[` without `]`")?;
-                let times: usize = rest[..open]
-                    .trim()
-                    .strip_suffix('x')
-                    .context("a group is written Nx[...]")?
-                    .trim()
-                    .parse()?;
-                let group = encoder(&rest[open + 1..close])?;
-                for _ in 0..times {
-                    out.extend_from_slice(&group);
-                }
-                close + 1
-            }
-            _ => {
-                let end = rest.find(',').unwrap_or(rest.len());
-                let item = rest[..end].trim();
-                let (ch, d) = item.split_once(':').unwrap_or((item, "1"));
-                out.push(ConvSpec::new(ch.trim().parse()?, d.trim().parse()?));
-                end
-            }
-        };
-        rest = rest[item_end..].trim_start();
-        rest = rest.strip_prefix(',').unwrap_or(rest).trim_start();
-    }
-    Ok(out)
-}
-
 fn main() -> Result<()> {
     let args = Args::parse();
-    let encoding = encoding(&args.encoding)?;
-    let kind: GeneratorKind = args.generator.parse()?;
+    let (kind, target, encoding) = (args.generator, args.target, args.encoding);
     let sizes: Vec<usize> = args
         .size
         .split(',')
@@ -214,12 +156,8 @@ fn main() -> Result<()> {
                 .with_context(|| format!("bad --size entry `{s}`"))
         })
         .collect::<Result<_>>()?;
-    let target = target_kind(&args.target)?;
-    let rule = match target {
-        TargetKind::Graph(rule) => rule,
-        TargetKind::FastMarching(_) => MoveRule::Strict,
-    };
-    let single = matches!(args.arch.as_str(), "plain" | "goal");
+    let rule = target.rule();
+    let single = args.arch.learns_one_scene();
     if single && sizes.len() > 1 {
         bail!("--arch {} learns one maze: give one --size", args.arch);
     }
@@ -227,31 +165,28 @@ fn main() -> Result<()> {
     // checked before the datasets are generated.
     let data = format!(
         "generator {}, sizes {}, {} mazes x {} goals per size, target {}, seed {}",
-        args.generator, args.size, args.mazes, args.goals_per_maze, args.target, args.seed
+        kind, args.size, args.mazes, args.goals_per_maze, target, args.seed
     );
     if args.new_data && args.resume.is_none() {
         bail!("--new-data changes the data of a resumed run: give --resume too");
     }
     let resumed = match &args.resume {
         Some(path) => {
-            let t = Trainer::resume(path)?;
-            match t.data_description() {
-                Some(before) if before != data && args.new_data => {
-                    eprintln!(
-                        "--new-data: {} was trained on {before}; going on with {data}",
-                        path.display()
-                    );
-                }
-                Some(before) if before != data => bail!(
-                    "{} was trained on data ({before}) other than these flags give ({data}): \
-                     pass the data flags of the run it continues, or --new-data to change them \
-                     on purpose",
+            let mut t = Trainer::resume(path)?;
+            match t.continue_with_data(data.clone(), args.new_data) {
+                Ok(DataCheck::Same) => {}
+                Ok(DataCheck::Changed { recorded }) => eprintln!(
+                    "--new-data: {} was trained on {recorded}; going on with {data}",
                     path.display()
                 ),
-                Some(_) => {}
-                None => eprintln!(
+                Ok(DataCheck::Unrecorded) => eprintln!(
                     "warning: {} does not record its training data (an older checkpoint); \
                      going on with {data}",
+                    path.display()
+                ),
+                Err(e) => bail!(
+                    "{}: {e}: pass the data flags of the run it continues, or --new-data to \
+                     change them on purpose",
                     path.display()
                 ),
             }
@@ -265,10 +200,10 @@ fn main() -> Result<()> {
     let mut validation = Vec::new();
     for &size in &sizes {
         let generator = MazeGenerator::new(kind, size)?;
-        let (mazes, goals) = match args.arch.as_str() {
-            "plain" => (1, 1),
-            "goal" => (1, args.goals_per_maze.max(64)),
-            _ => (args.mazes, args.goals_per_maze),
+        let (mazes, goals) = match args.arch {
+            Arch::Plain => (1, 1),
+            Arch::Goal => (1, args.goals_per_maze.max(64)),
+            Arch::Context | Arch::Hyper => (args.mazes, args.goals_per_maze),
         };
         let cfg = DatasetConfig {
             generator,
@@ -298,85 +233,51 @@ fn main() -> Result<()> {
     let first = &datasets[0].samples[0];
     let mut trainer = match resumed {
         Some(mut t) => {
-            t.set_steps(args.steps);
-            if let Some(w) = args.neighbour_weight {
-                t.set_neighbour_weight(w)?;
-            }
-            if let Some(f) = args.detour_fraction {
-                t.set_detour_fraction(f)?;
-            }
-            if let Some(f) = args.far_fraction {
-                t.set_far_fraction(f)?;
-            }
-            if let Some(f) = args.hard_fraction {
-                t.set_hard_fraction(f)?;
-            }
+            // The checkpoint's config, with the flags that apply to a resumed run.
+            let mut c = t.config().clone();
+            c.steps = args.steps;
+            c.neighbour_weight = args.neighbour_weight.unwrap_or(c.neighbour_weight);
+            c.detour_fraction = args.detour_fraction.unwrap_or(c.detour_fraction);
+            c.far_fraction = args.far_fraction.unwrap_or(c.far_fraction);
+            c.hard_fraction = args.hard_fraction.unwrap_or(c.hard_fraction);
             if let Some(w) = args.descent_weight {
-                t.set_descent(w, args.descent_margin, rule)?;
+                (c.descent_weight, c.descent_margin, c.descent_rule) =
+                    (w, args.descent_margin, rule);
             }
-            if args.dense {
-                t.set_dense(true);
-            }
-            if let Some(decay) = args.ema {
-                t.set_ema_decay(decay)?;
-            }
+            c.dense |= args.dense;
+            c.ema_decay = args.ema.unwrap_or(c.ema_decay);
+            t.set_config(c)?;
             t
         }
         None => {
-            let model = match args.arch.as_str() {
-                "plain" => ModelConfig::Plain(PlainConfig {
-                    extent: vec![first.grid.rows(), first.grid.cols()],
-                    goal: vec![first.goal.row, first.goal.col],
-                    mlp: MlpConfig {
-                        hidden: 128,
-                        layers: 4,
-                        fourier: 4,
-                        ..MlpConfig::default()
-                    },
-                    encoding,
-                }),
-                "goal" => ModelConfig::Goal(GoalConfig {
-                    extent: vec![first.grid.rows(), first.grid.cols()],
-                    mlp: MlpConfig {
-                        hidden: 128,
-                        layers: 4,
-                        fourier: 4,
-                        ..MlpConfig::default()
-                    },
-                    encoding,
-                }),
-                "context" => {
-                    let mut c = ContextConfig {
-                        encoding,
-                        residual: args.residual,
-                        ..ContextConfig::default()
-                    };
-                    if let Some(spec) = &args.encoder {
-                        c.encoder =
-                            encoder(spec).with_context(|| format!("bad --encoder `{spec}`"))?;
-                    }
-                    if args.propagation > 0 {
-                        c.propagation = Some(PropagationConfig {
-                            q_channels: args.propagation,
-                            iterations_per_cell: args.propagation_iterations,
-                        });
-                    }
-                    let (w, l) = args.mlp.split_once(':').context("--mlp WIDTH:LAYERS")?;
-                    c.mlp.hidden = w.parse()?;
-                    c.mlp.layers = l.parse()?;
-                    ModelConfig::Context(c)
+            let goal = [first.goal.row, first.goal.col];
+            let mut model = args
+                .arch
+                .preset(first.grid.rows(), first.grid.cols(), goal, encoding);
+            if let ModelConfig::Context(c) = &mut model {
+                c.residual = args.residual;
+                if let Some(spec) = &args.encoder {
+                    c.encoder = parse_convs(spec)?;
                 }
-                "hyper" => ModelConfig::Hyper(HyperConfig {
-                    encoding,
-                    ..HyperConfig::default()
-                }),
-                other => bail!("unknown --arch `{other}` (plain, goal, context or hyper)"),
-            };
+                if args.propagation > 0 {
+                    c.propagation = Some(PropagationConfig {
+                        q_channels: args.propagation,
+                        iterations_per_cell: args.propagation_iterations,
+                    });
+                }
+                let (w, l) = args.mlp.split_once(':').context("--mlp WIDTH:LAYERS")?;
+                c.mlp.hidden = w
+                    .parse()
+                    .with_context(|| format!("bad --mlp width `{w}`"))?;
+                c.mlp.layers = l
+                    .parse()
+                    .with_context(|| format!("bad --mlp layers `{l}`"))?;
+            }
             let train = TrainConfig {
                 lr: args.lr,
                 final_lr_fraction: args.final_lr,
                 batch_items: if single { 1 } else { args.batch },
-                queries_per_item: if args.arch == "plain" {
+                queries_per_item: if args.arch == Arch::Plain {
                     first.grid.len()
                 } else {
                     args.queries
@@ -397,10 +298,11 @@ fn main() -> Result<()> {
                 ema_decay: args.ema.unwrap_or(0.0),
                 ..TrainConfig::default()
             };
-            Trainer::new(FieldNet::new(model, args.seed)?, train)?
+            let mut t = Trainer::new(FieldNet::new(model, args.seed)?, train)?;
+            t.continue_with_data(data, false)?;
+            t
         }
     };
-    trainer.set_data_description(data);
     let net_info = format!(
         "{} network, {} parameters, sizes {:?}, {} samples per size",
         trainer.net().config().arch(),

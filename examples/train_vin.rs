@@ -11,7 +11,7 @@ use clap::Parser;
 use envfield::grid::MoveRule;
 use envfield::mazes::{GeneratorKind, MazeGenerator};
 use envfield::nets::{vin_examples, Vin, VinConfig, VinTrainConfig, VinTrainer};
-use envfield::plan::{evaluate, EvalConfig};
+use envfield::plan::{evaluate, EvalConfig, PolicyWalk};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -113,7 +113,7 @@ fn main() -> Result<()> {
         pairs_per_maze: 1,
         seed: 7,
     };
-    let report = evaluate(&net, &held_out, &eval, &mut |_, _| {})?;
+    let report = evaluate(&PolicyWalk(&net), &held_out, &eval, &mut |_, _| {})?;
     println!(
         "{{\"size\":{},\"steps\":{},\"seconds\":{:.1},\"loss\":{:.4},\"success_rate\":{:.2},\"path_ratio\":{:.4},\"ms_per_path\":{:.3}}}",
         args.size,

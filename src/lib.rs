@@ -5,11 +5,18 @@
 //! - [`grid`]: grids, fields, move rules, the maze text format, PNG/.npy I/O, `FieldModel`.
 //! - [`eikonal`]: fast marching (2D/3D, first/second order) and exact graph distances.
 //! - [`mazes`]: maze generators, datasets of target fields, evaluation pairs.
-//! - [`nets`]: implicit field networks (plain, goal, context-aligned, hypernetwork) and training.
-//! - [`plan`]: planners (field descent, gradient descent, A*) and the evaluation harness.
-//! - [`scene`]: signed-distance 3D scenes, OBJ/PLY, synthetic rooms, the bird's-eye floor map.
-//! - [`affordance`]: SMPL-layout poses and sequences, procedural motions, support and
-//!   collision checks, alignment to trajectories.
+//! - [`nets`] (feature `nets`): implicit field networks (plain, goal, context-aligned,
+//!   hypernetwork), VIN, training; [`models`] loads the weights planners by name need.
+//! - [`plan`]: planners (field descent, relays, gradient descent, A*, any policy), planners by
+//!   name, and the evaluation harness.
+//! - [`scene`] (feature `scene`): signed-distance 3D scenes, OBJ/PLY, synthetic rooms, the
+//!   bird's-eye floor map.
+//! - [`affordance`] (feature `scene`): SMPL-layout poses and sequences, procedural motions,
+//!   support and collision checks, alignment to trajectories.
+//!
+//! Both features are on by default. With `default-features = false` envfield is grids, fast
+//! marching, mazes and planners, and pulls in neither candle nor parry3d. The `cuda` feature
+//! runs the networks on an NVIDIA GPU through candle.
 //!
 //! ```
 //! use envfield::eikonal::FastMarching;
@@ -21,10 +28,16 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+#[cfg(feature = "nets")]
+pub mod models;
+
+#[cfg(feature = "scene")]
 pub use envfield_affordance as affordance;
 pub use envfield_eikonal as eikonal;
 pub use envfield_grid as grid;
 pub use envfield_mazes as mazes;
+#[cfg(feature = "nets")]
 pub use envfield_nets as nets;
 pub use envfield_plan as plan;
+#[cfg(feature = "scene")]
 pub use envfield_scene as scene;

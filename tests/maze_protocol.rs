@@ -2,7 +2,7 @@
 //! the harness on a hand-checked case, and descent's safety on random fields.
 
 use envfield::eikonal::{FastMarching, GraphDistance};
-use envfield::grid::synth::SplitMix64;
+use envfield::grid::SplitMix64;
 use envfield::grid::{parse_mazes, Cell2, Field2, Grid2, Maze, MoveRule, Neighbourhood2};
 use envfield::mazes::{GeneratorKind, MazeGenerator};
 use envfield::plan::{

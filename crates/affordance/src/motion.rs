@@ -6,7 +6,7 @@
 
 use std::f32::consts::{FRAC_PI_2, PI};
 
-use envfield_grid::synth::SplitMix64;
+use envfield_grid::SplitMix64;
 use nalgebra::{Point3, Rotation3, Vector3};
 use serde::{Deserialize, Serialize};
 

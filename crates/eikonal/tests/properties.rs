@@ -1,7 +1,8 @@
 //! Property tests on random grids (proptest, seeded through its config and our generator).
 
 use envfield_eikonal::{bfs2, bfs3, dijkstra2, dijkstra3, FastMarching, GraphDistance, Order};
-use envfield_grid::synth::{scatter_cubes3, scatter_squares2, SplitMix64};
+use envfield_grid::synth::{scatter_cubes3, scatter_squares2};
+use envfield_grid::SplitMix64;
 use envfield_grid::{
     Cell2, Cell3, FieldModel, Grid2, MoveRule, Neighbourhood2, Neighbourhood3, Symmetric,
 };

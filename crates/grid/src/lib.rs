@@ -15,6 +15,10 @@
 //!   the exact solvers and by every learned model.
 //! - [`Symmetry`]: the eight transposes and flips of a grid, under which both move rules look
 //!   the same; [`Symmetric`] averages any [`FieldModel`] over several of them.
+//! - What planners and learners share: [`descent_move`], [`is_wrong_move`],
+//!   [`octile_distance`] and the [`Policy`] trait (one move at a time, as VIN decides).
+//! - [`SplitMix64`], the seeded generator every crate draws from; [`synth`], random obstacle
+//!   layouts for tests and benchmarks.
 //!
 //! ```
 //! use envfield_grid::{parse_mazes, Cell2, MoveRule, Neighbourhood2};
@@ -44,6 +48,8 @@ mod model;
 mod moves;
 mod npy;
 mod png;
+mod rng;
+mod steps;
 mod symmetry;
 pub mod synth;
 
@@ -58,4 +64,6 @@ pub use model::{ContinuousField2, FieldModel};
 pub use moves::{MoveRule, Neighbourhood2, Neighbourhood3, DIRECTIONS_8};
 pub use npy::{NpyArray, NpyData};
 pub use png::{HeatMapStyle, OBSTACLE_COLOR, UNREACHABLE_COLOR};
+pub use rng::SplitMix64;
+pub use steps::{descent_move, is_wrong_move, octile_distance, Policy};
 pub use symmetry::{Symmetric, Symmetry};

@@ -1,4 +1,4 @@
-//! The maze text format of DESIGN.md.
+//! The maze text format (`docs/maze-format.md` in the repository).
 
 use crate::io::write_atomic;
 use crate::{Cell2, Grid2, GridError, Result};

@@ -4,7 +4,7 @@ use std::f32::consts::SQRT_2;
 use std::fmt;
 use std::str::FromStr;
 
-/// How an agent may step diagonally (DESIGN.md, "The two move rules").
+/// How an agent may step diagonally (`docs/move-rules.md` in the repository).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum MoveRule {

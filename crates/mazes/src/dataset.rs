@@ -1,37 +1,13 @@
-//! Datasets of (maze, goal, target field) samples and the paper's target encoding.
+//! Datasets of (maze, goal, exact distance field) samples.
 
 use crate::{MazeError, MazeGenerator, Result};
 use envfield_eikonal::{dijkstra2, FastMarching, Order};
-use envfield_grid::synth::SplitMix64;
-use envfield_grid::{Cell2, Field2, Grid2, MoveRule, Neighbourhood2, NpyArray, NpyData};
+use envfield_grid::{
+    Cell2, Field2, Grid2, MoveRule, Neighbourhood2, NpyArray, NpyData, SplitMix64,
+};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
-
-/// The value of obstacles and unreachable cells in the encoded target.
-pub const BLOCKED_TARGET: f32 = -1.0;
-
-/// The paper's target encoding (appendix A.4): the reciprocal of the reaching distance,
-/// normalised to `[0, 1]` as `1 / (1 + d)` (the goal is 1, far cells approach 0), and
-/// [`BLOCKED_TARGET`] (-1) for obstacles and unreachable cells. Distances are in cells.
-/// [`decode_target`] inverts it. The one function training and inference share.
-pub fn encode_target(distance: f32) -> f32 {
-    if distance.is_finite() && distance >= 0.0 {
-        1.0 / (1.0 + distance)
-    } else {
-        BLOCKED_TARGET
-    }
-}
-
-/// The inverse of [`encode_target`]: a predicted value `t` in `(0, 1]` is the distance
-/// `1/t - 1` (clamped at 0 above 1); `t <= 0` (obstacle or unreachable) is infinite.
-pub fn decode_target(t: f32) -> f32 {
-    if t > 0.0 {
-        (1.0 / t - 1.0).max(0.0)
-    } else {
-        f32::INFINITY
-    }
-}
 
 /// Which exact field supervises the targets.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -40,6 +16,47 @@ pub enum TargetKind {
     FastMarching(Order),
     /// Exact graph distance under a move rule (orthogonal 1, diagonal sqrt 2).
     Graph(MoveRule),
+}
+
+impl std::str::FromStr for TargetKind {
+    type Err = MazeError;
+
+    /// `fmm1` or `fmm2` (fast marching of that order), or a move rule (`strict`, `vin`: the
+    /// graph distance under it).
+    fn from_str(s: &str) -> Result<Self> {
+        match s {
+            "fmm1" => Ok(Self::FastMarching(Order::First)),
+            "fmm2" => Ok(Self::FastMarching(Order::Second)),
+            rule => rule.parse().map(Self::Graph).map_err(|_| {
+                MazeError::InvalidConfig(format!(
+                    "unknown target `{s}` (fmm1, fmm2, strict or vin)"
+                ))
+            }),
+        }
+    }
+}
+
+impl std::fmt::Display for TargetKind {
+    /// The name [`TargetKind::from_str`](std::str::FromStr) reads: `fmm1`, `fmm2`, `strict`
+    /// or `vin`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::FastMarching(Order::First) => f.write_str("fmm1"),
+            Self::FastMarching(Order::Second) => f.write_str("fmm2"),
+            Self::Graph(rule) => write!(f, "{rule}"),
+        }
+    }
+}
+
+impl TargetKind {
+    /// The move rule the target's paths follow: the graph's rule, `strict` for fast marching
+    /// (its 4-neighbour stencil cuts no corner).
+    pub fn rule(self) -> MoveRule {
+        match self {
+            Self::Graph(rule) => rule,
+            Self::FastMarching(_) => MoveRule::Strict,
+        }
+    }
 }
 
 /// How to build a dataset.
@@ -60,7 +77,9 @@ pub struct DatasetConfig {
     pub seed: u64,
 }
 
-/// One training sample: a grid, a goal and its encoded target (row-major).
+/// One training sample: a grid, a goal and the exact reaching distance of every cell
+/// (row-major). A network's target encoding (`envfield_nets::TargetEncoding`) turns the
+/// distances into training targets.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Sample {
     /// Index of the maze this sample was made from (for splitting by maze).
@@ -69,8 +88,9 @@ pub struct Sample {
     pub grid: Grid2,
     /// The goal.
     pub goal: Cell2,
-    /// `encode_target` of the exact field, one value per cell.
-    pub target: Vec<f32>,
+    /// The exact field's distance in cells, one value per cell; `f32::INFINITY` on obstacles
+    /// and unreachable cells.
+    pub distance: Vec<f32>,
 }
 
 /// A set of samples of one grid size.
@@ -133,12 +153,11 @@ impl Dataset {
                         }
                     }
                     let field = target_field(&grid, goal, cfg.target)?;
-                    let target = field.values().iter().map(|&d| encode_target(d)).collect();
                     out.push(Sample {
                         maze: i,
                         grid,
                         goal,
-                        target,
+                        distance: field.values().to_vec(),
                     });
                 }
                 Ok(out)
@@ -159,7 +178,8 @@ impl Dataset {
 
     /// Saves the dataset as `.npy` files in folder `dir` (created if needed), each written
     /// atomically: `obstacles.npy` (N, H, W bool), `goals.npy` (N, 2 float64 row, col),
-    /// `mazes.npy` (N float64 maze index), `targets.npy` (N, H, W float32).
+    /// `mazes.npy` (N float64 maze index), `distances.npy` (N, H, W float32, infinite where
+    /// blocked).
     ///
     /// # Errors
     /// [`MazeError::Dataset`] when the samples differ in size or the set is empty; I/O errors.
@@ -214,11 +234,11 @@ impl Dataset {
             NpyData::F32(
                 self.samples
                     .iter()
-                    .flat_map(|s| s.target.iter().copied())
+                    .flat_map(|s| s.distance.iter().copied())
                     .collect(),
             ),
         )
-        .write(dir.join("targets.npy"))?;
+        .write(dir.join("distances.npy"))?;
         Ok(())
     }
 
@@ -235,21 +255,21 @@ impl Dataset {
         let obstacles = NpyArray::read(dir.join("obstacles.npy"))?;
         let goals = NpyArray::read(dir.join("goals.npy"))?;
         let mazes = NpyArray::read(dir.join("mazes.npy"))?;
-        let targets = NpyArray::read(dir.join("targets.npy"))?;
+        let distances = NpyArray::read(dir.join("distances.npy"))?;
         let [n, h, w] = obstacles.shape[..] else {
             return Err(bad(format!(
                 "obstacles.npy has shape {:?}, expected (N, H, W)",
                 obstacles.shape
             )));
         };
-        if goals.shape != [n, 2] || mazes.shape != [n] || targets.shape != [n, h, w] {
+        if goals.shape != [n, 2] || mazes.shape != [n] || distances.shape != [n, h, w] {
             return Err(bad(format!(
-                "shapes disagree: obstacles {:?}, goals {:?}, mazes {:?}, targets {:?}",
-                obstacles.shape, goals.shape, mazes.shape, targets.shape
+                "shapes disagree: obstacles {:?}, goals {:?}, mazes {:?}, distances {:?}",
+                obstacles.shape, goals.shape, mazes.shape, distances.shape
             )));
         }
-        let (NpyData::Bool(obs), NpyData::F64(goals), NpyData::F64(ids), NpyData::F32(targets)) =
-            (obstacles.data, goals.data, mazes.data, targets.data)
+        let (NpyData::Bool(obs), NpyData::F64(goals), NpyData::F64(ids), NpyData::F32(distances)) =
+            (obstacles.data, goals.data, mazes.data, distances.data)
         else {
             return Err(bad(
                 "unexpected dtypes (bool, float64, float64, float32 expected)".into(),
@@ -266,7 +286,7 @@ impl Dataset {
                 maze: ids[i] as usize,
                 grid,
                 goal,
-                target: targets[i * cells..(i + 1) * cells].to_vec(),
+                distance: distances[i * cells..(i + 1) * cells].to_vec(),
             });
         }
         Ok(Self { samples })
@@ -277,17 +297,6 @@ impl Dataset {
 mod tests {
     use super::*;
     use crate::GeneratorKind;
-
-    #[test]
-    fn encoding_round_trips() {
-        for d in [0.0f32, 0.5, 1.0, 7.25, 300.0] {
-            let t = encode_target(d);
-            assert!((0.0..=1.0).contains(&t));
-            assert!((decode_target(t) - d).abs() < 1e-3 * d.max(1.0));
-        }
-        assert_eq!(encode_target(f32::INFINITY), BLOCKED_TARGET);
-        assert!(decode_target(BLOCKED_TARGET).is_infinite());
-    }
 
     #[test]
     fn save_load_round_trip_and_split() {
@@ -304,12 +313,10 @@ mod tests {
         assert_eq!(ds, Dataset::generate(&cfg).unwrap());
         for s in &ds.samples {
             let gi = s.grid.index(s.goal).unwrap();
-            assert_eq!(s.target[gi], 1.0);
-            for (i, &t) in s.target.iter().enumerate() {
-                assert_eq!(
-                    s.grid.obstacles()[i],
-                    t == BLOCKED_TARGET && s.grid.obstacles()[i]
-                );
+            assert_eq!(s.distance[gi], 0.0);
+            for (i, &d) in s.distance.iter().enumerate() {
+                // Obstacles are infinite; free cells may be too (cut off from the goal).
+                assert!(!s.grid.obstacles()[i] || d.is_infinite());
             }
         }
         let dir = std::env::temp_dir().join(format!("envfield-ds-{}", std::process::id()));

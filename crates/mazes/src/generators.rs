@@ -1,7 +1,7 @@
 //! Seeded maze generators of any size.
 
 use crate::{MazeError, Result};
-use envfield_grid::synth::SplitMix64;
+use envfield_grid::SplitMix64;
 use envfield_grid::{Cell2, Grid2, Maze};
 use serde::{Deserialize, Serialize};
 use std::fmt;

@@ -1,12 +1,14 @@
-//! Maze worlds for envfield: seeded generators, datasets of target fields, evaluation pairs.
+//! Maze worlds for envfield: seeded generators, datasets of exact distance fields, evaluation
+//! pairs.
 //!
 //! - [`MazeGenerator`] with [`GeneratorKind`]: `gridworld` (the VIN benchmark's generator,
 //!   [`Gridworld`]), `crossings` (Minigrid SimpleCrossing style), `rooms` (FourRooms /
 //!   MultiRoom style), `perfect` (recursive backtracker), any size, seeded.
-//! - [`Dataset`]: (maze, goal, target) samples in parallel, with the paper's target encoding
-//!   ([`encode_target`], appendix A.4), optional extra obstacles, a split by maze, and
-//!   `.npy` save/load.
-//! - [`evaluation_pairs`]: the pairs DESIGN.md's evaluation protocol runs on.
+//! - [`Dataset`]: (maze, goal, exact distance field) samples, generated in parallel, with
+//!   optional extra obstacles, a split by maze, and `.npy` save/load. The distances are
+//!   encoded for training by the network's own encoding (`envfield_nets::TargetEncoding`).
+//! - [`evaluation_pairs`]: the pairs the evaluation protocol runs on (`docs/evaluation.md` in
+//!   the repository).
 //!
 //! ```
 //! use envfield_grid::MoveRule;
@@ -23,10 +25,7 @@ mod error;
 mod generators;
 mod pairs;
 
-pub use dataset::{
-    decode_target, encode_target, target_field, Dataset, DatasetConfig, Sample, TargetKind,
-    BLOCKED_TARGET,
-};
+pub use dataset::{target_field, Dataset, DatasetConfig, Sample, TargetKind};
 pub use error::{MazeError, Result};
 pub use generators::{GeneratorKind, Gridworld, MazeGenerator};
 pub use pairs::{evaluation_pairs, Pair};

@@ -1,8 +1,8 @@
-//! Evaluation pairs (DESIGN.md, "Evaluation protocol").
+//! Evaluation pairs (`docs/evaluation.md`, step 1).
 
 use crate::{MazeError, Result};
 use envfield_eikonal::bfs2;
-use envfield_grid::synth::SplitMix64;
+use envfield_grid::SplitMix64;
 use envfield_grid::{Cell2, Maze, MoveRule, Neighbourhood2};
 use serde::{Deserialize, Serialize};
 

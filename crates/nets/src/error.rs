@@ -59,6 +59,15 @@ pub enum NetsError {
         /// The files looked for, in order.
         looked: Vec<PathBuf>,
     },
+    /// A resumed run was given other training data than its checkpoint records (see
+    /// [`crate::Trainer::continue_with_data`]).
+    #[error("the checkpoint was trained on data ({recorded}) other than the data given ({given})")]
+    DataMismatch {
+        /// What the checkpoint records.
+        recorded: String,
+        /// What the caller gave.
+        given: String,
+    },
     /// Training diverged (a loss that is not finite).
     #[error("training diverged at step {step}: loss {loss}")]
     Diverged {

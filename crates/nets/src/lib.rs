@@ -9,10 +9,15 @@
 //! - A whole field in one batched pass ([`FieldNet::field`], also [`FieldModel::predict`]) and
 //!   gradients with respect to the query ([`FieldNet::predict_with_gradient`],
 //!   [`BoundField`], a [`ContinuousField2`](envfield_grid::ContinuousField2)).
-//! - [`Trainer`]: L1 on the paper's encoding, AdamW, seeded batches from
-//!   [`envfield_mazes::Dataset`]s, atomic safetensors checkpoints that resume exactly.
+//! - [`TargetEncoding`]: the one owner of how distances become outputs and back (the paper's
+//!   `1/(1+d)`, or `1 - d/scale`); datasets store distances, networks encode them.
+//! - [`Trainer`]: L1 on the network's encoding plus optional neighbour-difference and descent
+//!   losses, AdamW, seeded batches from [`envfield_mazes::Dataset`]s, atomic safetensors
+//!   checkpoints that resume exactly and refuse other data ([`Trainer::continue_with_data`]).
+//!   [`Arch::preset`] gives the networks the examples train.
 //! - [`Vin`]: the Value Iteration Network baseline (Tamar et al. 2016), trained by imitation
-//!   ([`VinTrainer`]), and a [`Planner`](envfield_plan::Planner) that runs it at every step.
+//!   ([`VinTrainer`]); it is a [`Policy`](envfield_grid::Policy), which
+//!   `envfield_plan::PolicyWalk` plans with, one network pass per step.
 //! - Weight files carry their config: [`FieldNet::load`] rebuilds the network, checking every
 //!   tensor's name and shape; [`model_file`] picks a family's file for a maze size.
 //!
@@ -30,22 +35,28 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+mod batch;
+mod config;
+mod encoding;
 mod error;
 mod files;
 mod kernel;
 mod layers;
-mod model;
+mod net;
 mod params;
 mod train;
 mod vin;
 
+pub use batch::Batch;
+pub use config::{
+    parse_convs, Arch, ContextConfig, GoalConfig, HyperConfig, ModelConfig, PlainConfig,
+    PropagationConfig,
+};
+pub use encoding::{TargetEncoding, BLOCKED};
 pub use envfield_grid::FieldModel;
 pub use error::{NetsError, Result};
 pub use files::model_file;
 pub use layers::{Activation, ConvSpec, MlpConfig};
-pub use model::{
-    prediction_to_distance, Batch, BoundField, ContextConfig, FieldNet, GoalConfig, HyperConfig,
-    ModelConfig, PlainConfig, PropagationConfig, TargetEncoding,
-};
-pub use train::{validation_loss, Progress, TrainConfig, TrainSummary, Trainer};
+pub use net::{BoundField, FieldNet};
+pub use train::{validation_loss, DataCheck, Progress, TrainConfig, TrainSummary, Trainer};
 pub use vin::{vin_examples, Vin, VinConfig, VinExample, VinTrainConfig, VinTrainer};

@@ -3,7 +3,7 @@
 
 use crate::{NetsError, Result};
 use candle_core::{Device, Tensor, Var};
-use envfield_grid::synth::SplitMix64;
+use envfield_grid::SplitMix64;
 use safetensors::tensor::{Dtype, SafeTensors, TensorView};
 use std::collections::HashMap;
 use std::path::Path;

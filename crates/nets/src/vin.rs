@@ -9,9 +9,9 @@ use crate::params::{
 use crate::{NetsError, Result};
 use candle_core::{Device, Tensor, D};
 use envfield_eikonal::dijkstra2;
-use envfield_grid::synth::SplitMix64;
-use envfield_grid::{Cell2, Grid2, Maze, MoveRule, Neighbourhood2, DIRECTIONS_8};
-use envfield_plan::{PlanError, PlanOutcome, Planner};
+use envfield_grid::{
+    Cell2, Grid2, Maze, MoveRule, Neighbourhood2, Policy, SplitMix64, DIRECTIONS_8,
+};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
@@ -479,54 +479,30 @@ impl VinTrainer {
     }
 }
 
-/// VIN as a planner: at every step the network runs on the maze and the agent takes the legal
-/// action with the highest logit (VIN's own policy, masked to legal moves); it stops on the
-/// goal, after `max_steps`, or on revisiting a cell.
-impl Planner for Vin {
+/// VIN's policy: the network runs on the maze for every move and scores the eight actions by
+/// their logits, so `envfield_plan::PolicyWalk(vin)` plans as VIN does (the legal action with
+/// the highest logit at every step).
+impl Policy for Vin {
     fn name(&self) -> &str {
         "vin"
     }
 
-    fn plan(
+    fn rule(&self) -> MoveRule {
+        self.config.rule
+    }
+
+    fn action_scores(
         &self,
         grid: &Grid2,
-        start: Cell2,
         goal: Cell2,
-        max_steps: usize,
-    ) -> envfield_plan::Result<PlanOutcome> {
-        let model_err = |e: NetsError| {
-            PlanError::from(envfield_grid::GridError::Model {
+        state: Cell2,
+    ) -> envfield_grid::Result<[f32; 8]> {
+        self.action_logits(grid, goal, state).map_err(|e| match e {
+            NetsError::Grid(g) => g,
+            other => envfield_grid::GridError::Model {
                 model: "vin".into(),
-                source: Box::new(e),
-            })
-        };
-        grid.check_free(start, "start")?;
-        grid.check_free(goal, "goal")?;
-        let mut path = vec![start];
-        let mut seen = std::collections::HashSet::from([start]);
-        let mut here = start;
-        while here != goal && path.len() <= max_steps {
-            let logits = self.action_logits(grid, goal, here).map_err(model_err)?;
-            let best = (0..8)
-                .filter(|&k| {
-                    let (dr, dc) = DIRECTIONS_8[k];
-                    self.config.rule.allows(grid, here, dr, dc)
-                })
-                .max_by(|&a, &b| logits[a].total_cmp(&logits[b]));
-            let Some(k) = best else { break };
-            let (dr, dc) = DIRECTIONS_8[k];
-            let Some(next) = here.offset(dr, dc) else {
-                break;
-            };
-            if !seen.insert(next) {
-                break;
-            }
-            path.push(next);
-            here = next;
-        }
-        Ok(PlanOutcome {
-            success: here == goal,
-            path,
+                source: Box::new(other),
+            },
         })
     }
 }

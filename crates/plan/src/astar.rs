@@ -1,6 +1,6 @@
 use crate::planner::check_query;
 use crate::{PlanOutcome, Planner, Result};
-use envfield_grid::{Cell2, Field2, FieldModel, Grid2, MoveRule, Neighbourhood2};
+use envfield_grid::{octile_distance, Cell2, Field2, FieldModel, Grid2, MoveRule, Neighbourhood2};
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
@@ -27,12 +27,6 @@ impl Ord for Node {
     }
 }
 
-pub(crate) fn octile(a: Cell2, b: Cell2) -> f32 {
-    let dr = a.row.abs_diff(b.row) as f32;
-    let dc = a.col.abs_diff(b.col) as f32;
-    dr.max(dc) + (std::f32::consts::SQRT_2 - 1.0) * dr.min(dc)
-}
-
 /// The octile distance to the goal on every free cell (obstacles infinite), blind to the walls
 /// in between: what a field knows with no knowledge of the maze's layout. The control for
 /// learned fields and for planners built on them (how much of a planner's success does not
@@ -51,7 +45,7 @@ impl FieldModel for Octile {
             for col in 0..grid.cols() {
                 let c = Cell2::new(row, col);
                 values.push(if grid.is_free(c) {
-                    octile(c, goal)
+                    octile_distance(c, goal)
                 } else {
                     f32::INFINITY
                 });
@@ -81,7 +75,7 @@ impl Planner for AStar {
         let (s, t) = (grid.check(start)?, grid.check(goal)?);
         g[s] = 0.0;
         let mut open = BinaryHeap::new();
-        open.push(Node(octile(start, goal), 0.0, s));
+        open.push(Node(octile_distance(start, goal), 0.0, s));
         while let Some(Node(_, gi, i)) = open.pop() {
             if closed[i] {
                 continue;
@@ -96,7 +90,7 @@ impl Planner for AStar {
                 if ng < g[j] {
                     g[j] = ng;
                     parent[j] = i;
-                    open.push(Node(ng + octile(c, goal), ng, j));
+                    open.push(Node(ng + octile_distance(c, goal), ng, j));
                 }
             }
         }

@@ -1,6 +1,6 @@
 use crate::planner::check_query;
 use crate::{PlanOutcome, Planner, Result};
-use envfield_grid::{Cell2, Field2, FieldModel, Grid2, MoveRule, Neighbourhood2};
+use envfield_grid::{descent_move, Cell2, Field2, FieldModel, Grid2, MoveRule};
 
 /// Field descent: predict the whole field once, then step to the neighbour (under the move
 /// rule) with the smallest value. Works on any [`FieldModel`], exact or learned.
@@ -23,36 +23,6 @@ impl<M: FieldModel> FieldDescent<M> {
         let name = model.name().to_string();
         Self { model, rule, name }
     }
-}
-
-/// The move descent takes from `cell`: the neighbour under `rule` of least finite value in
-/// `field`, ties to the first direction in [`envfield_grid::DIRECTIONS_8`] order; `None`
-/// when every neighbour is infinite (or `cell` is an obstacle).
-pub fn descent_move(grid: &Grid2, field: &Field2, rule: MoveRule, cell: Cell2) -> Option<Cell2> {
-    let mut best: Option<(Cell2, f32)> = None;
-    for (next, _) in grid.neighbours(cell, Neighbourhood2::Eight(rule)) {
-        let v = field.get(next).unwrap_or(f32::INFINITY);
-        if v.is_finite() && best.is_none_or(|(_, b)| v < b) {
-            best = Some((next, v));
-        }
-    }
-    best.map(|(next, _)| next)
-}
-
-/// Whether descent's move from `cell` (see [`descent_move`]) is wrong: its true distance, by
-/// `distance`, exceeds the best move's (up to a relative 1e-4), or there is no move at all.
-pub fn is_wrong_move(
-    grid: &Grid2,
-    field: &Field2,
-    rule: MoveRule,
-    cell: Cell2,
-    distance: impl Fn(Cell2) -> f32,
-) -> bool {
-    let best = grid
-        .neighbours(cell, Neighbourhood2::Eight(rule))
-        .map(|(n, _)| distance(n))
-        .fold(f32::INFINITY, f32::min);
-    descent_move(grid, field, rule, cell).is_none_or(|n| distance(n) > best + 1e-4 * best.max(1.0))
 }
 
 /// `model`'s field towards `goal` on `grid`, checked to have the grid's shape.

@@ -1,4 +1,4 @@
-//! The maze evaluation harness: DESIGN.md's protocol, exactly.
+//! The maze evaluation harness: the protocol of `docs/evaluation.md`, exactly.
 
 use crate::{path_length, Planner, Result};
 use envfield_eikonal::{bfs2, dijkstra2};
@@ -80,7 +80,7 @@ pub fn is_legal_walk(grid: &Grid2, rule: MoveRule, path: &[Cell2]) -> bool {
         })
 }
 
-/// Runs `planner` on every evaluation pair of `mazes` ([`evaluation_pairs`]) by DESIGN.md's
+/// Runs `planner` on every evaluation pair of `mazes` ([`evaluation_pairs`]) by the evaluation
 /// protocol: the agent succeeds when its path is a legal walk from the start that ends on the
 /// goal within `2 x optimal_cells` moves; the path ratio averages length / shortest length over
 /// successes; time covers the planner's whole call. The harness rechecks every path itself

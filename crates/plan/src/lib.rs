@@ -10,8 +10,13 @@
 //! - [`gradient_descent`]: fixed-length steps against the gradient of a continuous field
 //!   (paper Fig. 3c).
 //! - [`AStar`]: octile A* under either move rule.
-//! - [`evaluate`]: DESIGN.md's maze protocol (success within 2 x the fewest path cells, path
-//!   ratio over successes, milliseconds per path), rechecking every path itself.
+//! - [`evaluate`]: the maze evaluation protocol (`docs/evaluation.md` in the repository:
+//!   success within 2 x the fewest path cells, path ratio over successes, milliseconds per
+//!   path), rechecking every path itself.
+//! - [`PolicyWalk`]: a planner for any [`Policy`](envfield_grid::Policy) (one decision per
+//!   step, as VIN makes them).
+//! - [`PlannerKind`]: planners by name (`field`, `relay`, `octile`, `fmm`, `astar`, ...), the
+//!   names the examples and benchmarks take.
 //!
 //! ```
 //! use envfield_eikonal::FastMarching;
@@ -33,17 +38,21 @@ mod descent;
 mod error;
 mod gradient;
 mod harness;
+mod named;
 mod planner;
+mod policy;
 mod profile;
 mod relay;
 
 pub use astar::{AStar, Octile};
-pub use descent::{descend, descent_move, is_wrong_move, FieldDescent};
+pub use descent::{descend, FieldDescent};
 pub use error::{PlanError, Result};
 pub use gradient::{gradient_descent, ContinuousPath, GradientDescentConfig};
 pub use harness::{
     evaluate, evaluate_pairs, is_legal_walk, EvalConfig, PairResult, Report, Summary,
 };
+pub use named::{BoxedField, BoxedPolicy, Learned, NamedPlanner, PlannerKind, PlannerOptions};
 pub use planner::{path_length, PlanOutcome, Planner};
+pub use policy::PolicyWalk;
 pub use profile::{Band, DecisionProfile};
 pub use relay::{relay_cells, remove_loops, RelayDescent};

@@ -1,8 +1,9 @@
 //! Where field descent goes wrong: its decisions and outcomes from every reachable cell,
 //! grouped by the cell's true distance to the goal.
 
-use crate::{descend, is_wrong_move, PlanError, Result};
+use crate::{descend, PlanError, Result};
 use envfield_eikonal::{bfs2, dijkstra2};
+use envfield_grid::is_wrong_move;
 use envfield_grid::{Cell2, Field2, Grid2, MoveRule, Neighbourhood2};
 use serde::{Deserialize, Serialize};
 
@@ -15,7 +16,7 @@ pub struct Band {
     /// direction, as [`descend`] takes it) is not a shortest move: its true distance exceeds
     /// the best move's.
     pub wrong: usize,
-    /// Cells from which descent does not reach the goal within DESIGN.md's budget (twice the
+    /// Cells from which descent does not reach the goal within the evaluation protocol's budget (twice the
     /// fewest cells on a path).
     pub failing: usize,
 }

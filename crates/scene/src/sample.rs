@@ -1,6 +1,6 @@
 //! Surface point sampling (the point cloud a scene encoder reads) and voxelisation.
 
-use envfield_grid::synth::SplitMix64;
+use envfield_grid::SplitMix64;
 use envfield_grid::{Cell3, Grid3};
 use nalgebra::{Point3, Vector3};
 use parry3d::bounding_volume::Aabb;

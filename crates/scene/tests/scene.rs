@@ -1,8 +1,8 @@
 //! Signed distances against analytic values and parry3d, meshes, rooms and their maps.
 
 use approx::assert_relative_eq;
-use envfield_grid::synth::SplitMix64;
 use envfield_grid::Cell3;
+use envfield_grid::SplitMix64;
 use envfield_scene::parry3d::query::PointQuery;
 use envfield_scene::parry3d::shape::Cuboid;
 use envfield_scene::{

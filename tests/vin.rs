@@ -1,12 +1,12 @@
 //! The VIN baseline learns to plan on small mazes, and its files round-trip.
 
-use envfield_grid::{Cell2, MoveRule};
-use envfield_mazes::{GeneratorKind, MazeGenerator};
-use envfield_nets::{
+use envfield::grid::{Cell2, MoveRule};
+use envfield::mazes::{GeneratorKind, MazeGenerator};
+use envfield::nets::{
     vin_examples, ContextConfig, FieldNet, ModelConfig, NetsError, Vin, VinConfig, VinTrainConfig,
     VinTrainer,
 };
-use envfield_plan::{evaluate, EvalConfig};
+use envfield::plan::{evaluate, EvalConfig, PolicyWalk};
 
 fn tmp(name: &str) -> std::path::PathBuf {
     let dir = std::env::temp_dir().join(format!("envfield-vin-{}", std::process::id()));
@@ -33,7 +33,7 @@ fn vin_learns_8x8_mazes_and_resumes() {
         seed: 3,
     };
     let untrained = Vin::new(VinConfig::for_size(8), 0).unwrap();
-    let before = evaluate(&untrained, &held_out, &eval, &mut |_, _| {}).unwrap();
+    let before = evaluate(&PolicyWalk(&untrained), &held_out, &eval, &mut |_, _| {}).unwrap();
 
     let mut trainer =
         VinTrainer::new(Vin::new(VinConfig::for_size(8), 0).unwrap(), cfg.clone()).unwrap();
@@ -57,7 +57,7 @@ fn vin_learns_8x8_mazes_and_resumes() {
         b.action_logits(&maze.grid, goal, start).unwrap()
     );
 
-    let after = evaluate(&a, &held_out, &eval, &mut |_, _| {}).unwrap();
+    let after = evaluate(&PolicyWalk(&a), &held_out, &eval, &mut |_, _| {}).unwrap();
     assert!(
         after.summary.success_rate >= 80.0
             && after.summary.success_rate > before.summary.success_rate + 20.0,
