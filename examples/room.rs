@@ -13,7 +13,7 @@ use std::time::Instant;
 
 use anyhow::{Context, Result};
 use clap::Parser;
-use envfield::affordance::{align_in_scene, walk, AlignConfig, Joint, WalkConfig};
+use envfield::affordance::{align_in_scene, resample_path, walk, AlignConfig, Joint, WalkConfig};
 use envfield::eikonal::FastMarching;
 use envfield::grid::{Cell2, HeatMapStyle, MoveRule};
 use envfield::plan::descend;
@@ -132,17 +132,7 @@ fn main() -> Result<()> {
             Point3::new(x, y, 0.0)
         })
         .collect();
-    let mut trajectory = vec![cells[0]];
-    let mut carried = 0.0;
-    for w in cells.windows(2) {
-        let d = distance(&w[0], &w[1]);
-        let mut s = step - carried;
-        while s <= d {
-            trajectory.push(w[0] + (w[1] - w[0]) * (s / d));
-            s += step;
-        }
-        carried = d - (s - step);
-    }
+    let trajectory = resample_path(&cells, step)?;
     let length: f32 = cells.windows(2).map(|w| distance(&w[0], &w[1])).sum();
     let t = Instant::now();
     let (aligned, reports) = align_in_scene(

@@ -41,3 +41,8 @@ pub use envfield_nets as nets;
 pub use envfield_plan as plan;
 #[cfg(feature = "scene")]
 pub use envfield_scene as scene;
+
+// The README's Rust example runs as a doc test.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;

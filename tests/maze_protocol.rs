@@ -13,18 +13,25 @@ use proptest::prelude::*;
 use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
 use std::path::PathBuf;
 
+/// VIN's test set of side `n`, from the shared data folder beside the repository. Where it is
+/// absent the test skips with a printed reason, except under CI (`CI=true`), which always has
+/// the data: there a missing file fails the test rather than letting it pass with nothing run.
 fn vin_file(n: usize) -> Option<PathBuf> {
     let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join(format!("../shared/data/vin/vin_test_{n}.txt"));
     if p.exists() {
-        Some(p)
-    } else {
-        eprintln!(
-            "skipping: {} not found (the VIN test sets live in ../shared/data/vin/)",
-            p.display()
-        );
-        None
+        return Some(p);
     }
+    let reason = format!(
+        "{} not found (the VIN test sets live in ../shared/data/vin/)",
+        p.display()
+    );
+    assert!(
+        std::env::var("CI").as_deref() != Ok("true"),
+        "CI=true: {reason}"
+    );
+    eprintln!("skipping: {reason}");
+    None
 }
 
 #[test]
@@ -292,13 +299,12 @@ const RELAY_FLOOR: f64 = 99.0;
 #[test]
 fn shipped_field_model_solves_vin_test_sets() {
     let models = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("models");
-    if !models.join("context.safetensors").is_file() {
-        eprintln!(
-            "skipping: {} not found",
-            models.join("context.safetensors").display()
-        );
-        return;
-    }
+    // The shipped models are part of the repository: a missing one is a failure.
+    assert!(
+        models.join("context.safetensors").is_file(),
+        "{} not found",
+        models.join("context.safetensors").display()
+    );
     for (n, floor) in [(8, FLOOR_8), (16, FLOOR_16), (28, FLOOR_28)] {
         let Some(path) = vin_file(n) else { return };
         // The model maze_nav picks: context_<n> when it is there, else the all-sizes one.

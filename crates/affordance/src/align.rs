@@ -165,3 +165,50 @@ pub fn align_in_scene(
     }
     Ok((aligned, reports))
 }
+/// Points along the polyline `path` every `step` metres of arc length, starting at its first
+/// point (the last point is kept only when it falls on a step): the positions of a gait that
+/// covers `step` per frame, ready for [`align_in_scene`]. O(points + steps).
+///
+/// ```
+/// use envfield_affordance::resample_path;
+/// use nalgebra::Point3;
+/// let path = [Point3::new(0.0, 0.0, 0.0), Point3::new(1.0, 0.0, 0.0), Point3::new(1.0, 1.0, 0.0)];
+/// let points = resample_path(&path, 0.5)?;
+/// assert_eq!(points.len(), 5);
+/// assert!((points[3] - Point3::new(1.0, 0.5, 0.0)).norm() < 1e-6);
+/// # Ok::<(), envfield_affordance::AffordanceError>(())
+/// ```
+///
+/// # Errors
+/// [`AffordanceError::InvalidInput`] for a step that is not positive and finite, or a path that
+/// is empty or holds a point that is not finite.
+pub fn resample_path(path: &[Point3<f32>], step: f32) -> Result<Vec<Point3<f32>>> {
+    if !(step.is_finite() && step > 0.0) {
+        return Err(AffordanceError::InvalidInput(format!(
+            "resampling step must be positive and finite (got {step})"
+        )));
+    }
+    let Some(&first) = path.first() else {
+        return Err(AffordanceError::InvalidInput(
+            "cannot resample an empty path".into(),
+        ));
+    };
+    if let Some(i) = path.iter().position(|p| !p.iter().all(|v| v.is_finite())) {
+        return Err(AffordanceError::InvalidInput(format!(
+            "path point {i} is not finite"
+        )));
+    }
+    let mut out = vec![first];
+    // The arc length walked past the last emitted point, carried from one segment to the next.
+    let mut carried = 0.0;
+    for w in path.windows(2) {
+        let d = nalgebra::distance(&w[0], &w[1]);
+        let mut s = step - carried;
+        while s <= d {
+            out.push(w[0] + (w[1] - w[0]) * (s / d));
+            s += step;
+        }
+        carried = d - (s - step);
+    }
+    Ok(out)
+}

@@ -10,11 +10,10 @@
 //! comparisons because the last entry of a front belongs near the bottom; in a full 4-ary node
 //! the smallest child comes from a tree of compares (pairs, then their winners), as each level
 //! of that walk waits on the previous one's choice. The marcher picks the
-//! arity by grid size: 2 on small grids, where it runs about 15% fewer instructions than 4 or
-//! 8 (callgrind on 28^2 and 256^2 grids) and 28^2 solves took 5-10% less CPU time; 4 on large
-//! ones, where a pop is a chain of dependent loads and cache misses (one per level, each moving
-//! an entry and rewriting its cell's record), so half the levels beat fewer comparisons: CPU
-//! time -9% on 128^3 and -3 to -5% on 1024^2 at second order.
+//! arity by grid size: 2 on small grids, where it runs fewer instructions than 4 or 8; 4 on
+//! large ones, where a pop is a chain of dependent loads and cache misses (one per level, each
+//! moving an entry and rewriting its cell's record), so half the levels beat fewer
+//! comparisons. The measurements are in `docs/performance.md`.
 
 /// Per-cell record of the marcher: the accepted value (infinity until accepted) and a tag
 /// that is the cell's heap position while it is queued, or one of [`FAR`], [`BLOCKED`],

@@ -90,7 +90,7 @@ struct Marcher<const N: usize, const ARITY: usize> {
     tau_uniform: f64,
     second_order: bool,
     /// Prefetch the next cell's stencil rows (large grids only: on small ones every record is
-    /// in the cache already, and the prefetches cost 10% on 28^2).
+    /// in the cache already, and the prefetches only cost time).
     prefetch: bool,
     heap: IndexedHeap<ARITY>,
 }
@@ -239,8 +239,7 @@ impl<const N: usize, const ARITY: usize> Marcher<N, ARITY> {
     /// `c`'s cache lines) while the current cell's neighbours are updated. `c` is the heap's
     /// next cell, so its records are usually in the cache by the time it is accepted: the
     /// front visits cells in order of value, not of address, and on large grids it outgrows
-    /// the L2 cache. Measured here: CPU time -8% on 1024² and -12% on 128³ at second order,
-    /// -3% at first order.
+    /// the L2 cache (the gain is measured in `docs/performance.md`).
     #[inline(always)]
     fn prefetch_around(&self, c: usize) {
         #[cfg(target_arch = "x86_64")]

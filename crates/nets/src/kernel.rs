@@ -8,12 +8,8 @@
 //! in registers while it runs over the taps and input channels: one broadcast and a handful of
 //! fused multiply-adds per input value. On x86-64 it is compiled again for AVX2 with FMA and
 //! for AVX-512, and the widest the CPU has is picked at run time; elsewhere the portable build
-//! runs (the compiler vectorises it for the baseline target).
-//!
-//! Measured on this project's 2-core machine (AVX-512) in `maze_nav` on VIN's 28x28 test set,
-//! one thread, 11-convolution default encoder: 4.1 ms per path with the im2col gather and
-//! candle's matrix multiply, 2.4 ms with this kernel built for AVX2, 1.5-1.8 ms for AVX-512
-//! (another training sharing the cores in every case).
+//! runs (the compiler vectorises it for the baseline target). What it gained is measured in
+//! `docs/performance.md`.
 
 /// One convolution's shape: a channels-last input (H, W, C), 3x3 taps `dilation` apart with
 /// zero padding of `dilation`, and `stride`; output (Ho, Wo, Co) with Ho = (H - 1) / stride + 1.

@@ -330,7 +330,9 @@ fn training_resumes_exactly_from_a_checkpoint() {
 
     let ckpt = tmp("resume.ckpt");
     let mut first = make();
-    first.set_data_description("8x8 gridworld, 6 mazes x 2 goals, seed 9");
+    first
+        .continue_with_data("8x8 gridworld, 6 mazes x 2 goals, seed 9", false)
+        .unwrap();
     first
         .run(std::slice::from_ref(&data), None, Some(&ckpt), |p| {
             p.step < 3

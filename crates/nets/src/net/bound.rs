@@ -5,7 +5,7 @@ use crate::{Batch, Result};
 use envfield_grid::{Cell2, ContinuousField2, FieldModel, Grid2, Point2};
 
 /// A network bound to one grid and goal: values and analytic gradients at continuous points
-/// ([`ContinuousField2`]), in distance units (decoded as [`TargetEncoding::decode`]).
+/// ([`ContinuousField2`]), in distance units (decoded as [`crate::TargetEncoding::decode`]).
 #[derive(Debug)]
 pub struct BoundField<'a> {
     pub(super) net: &'a FieldNet,

@@ -30,8 +30,8 @@ enum Net {
 }
 
 /// An implicit environment-field network (any of the four architectures), its parameters and
-/// its device. Outputs are in the paper's target encoding (`1 / (1 + d)`, -1 blocked; see
-/// [`envfield_mazes::encode_target`]); [`FieldModel::predict`] decodes them into distances.
+/// its device. Outputs are in the config's [`crate::TargetEncoding`] (the paper's `1 / (1 + d)`
+/// or `1 - d / scale`, -1 blocked); [`FieldModel::predict`] decodes them into distances.
 #[derive(Debug)]
 pub struct FieldNet {
     config: ModelConfig,
@@ -315,7 +315,7 @@ impl FieldNet {
     }
 
     /// The reaching-distance field of `grid` for `goal`: one batched forward pass (the encoder
-    /// once, every free cell in one MLP batch), decoded with [`TargetEncoding::decode`]; obstacles
+    /// once, every free cell in one MLP batch), decoded with [`crate::TargetEncoding::decode`]; obstacles
     /// are infinite.
     ///
     /// # Errors

@@ -75,17 +75,14 @@ impl Trainer {
         trainer.data = file.metadata.get(META_DATA).cloned();
         Ok(trainer)
     }
-    /// Records what the training data is (the datasets are the caller's, so a checkpoint
-    /// cannot hold them): checkpoints carry the text, and [`Trainer::data_description`] on a
-    /// resumed trainer gives it back, so a caller can refuse to go on with other data.
-    pub fn set_data_description(&mut self, description: impl Into<String>) {
-        self.data = Some(description.into());
-    }
 
-    /// The data description set on this trainer or read from its checkpoint, if any.
+    /// What this trainer's data is, as [`Trainer::continue_with_data`] recorded it or its
+    /// checkpoint carried it. The datasets are the caller's, so a checkpoint cannot hold them;
+    /// it holds this text instead.
     pub fn data_description(&self) -> Option<&str> {
         self.data.as_deref()
     }
+
     /// Checks the data a run goes on with against the description its checkpoint recorded,
     /// then records `data` as this run's: a resumed run must train on the data it began with,
     /// unless `allow_change` (fine-tuning, a curriculum). A fresh trainer takes any data.

@@ -26,7 +26,7 @@ pub struct Trainer {
     /// The moving average of the weights (see [`TrainConfig::ema_decay`]), one tensor per
     /// parameter in the store's order.
     ema: Option<Vec<Tensor>>,
-    /// What the caller says the training data is (see [`Trainer::set_data_description`]).
+    /// What the caller says the training data is (see [`Trainer::continue_with_data`]).
     data: Option<String>,
 }
 impl Trainer {
@@ -315,7 +315,7 @@ fn check_single_size(data: &Dataset, k: usize) -> Result<()> {
     }
     Ok(())
 }
-/// Mean absolute error of `net`'s encoded output (in its own [`TargetEncoding`]) over every
+/// Mean absolute error of `net`'s encoded output (in its own [`crate::TargetEncoding`]) over every
 /// cell of up to `limit` samples.
 ///
 /// # Errors
