@@ -50,8 +50,16 @@ fn load(path: &Path) -> Result<Input> {
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("");
     Ok(match ext {
         "txt" => {
-            let mazes = envfield::grid::read_mazes(path)?;
-            let m = mazes.into_iter().next().context("no maze in file")?;
+            let mut mazes = envfield::grid::read_mazes(path)?;
+            if mazes.len() != 1 {
+                bail!(
+                    "{}: holds {} mazes; fmm solves one grid (split the file, or use maze_nav \
+                     for many)",
+                    path.display(),
+                    mazes.len()
+                );
+            }
+            let m = mazes.remove(0);
             Input::Two(m.grid, m.goal)
         }
         "png" => Input::Two(Grid2::read_png(path)?, None),
@@ -82,10 +90,13 @@ fn median_ms(mut times: Vec<f64>) -> f64 {
     times[times.len() / 2]
 }
 
+/// Solves a timing run repeats at most: more is a typo, not a measurement.
+const MAX_REPEAT: usize = 1_000_000;
+
 fn main() -> Result<()> {
     let args = Args::parse();
-    if args.repeat == 0 {
-        bail!("--repeat must be at least 1");
+    if !(1..=MAX_REPEAT).contains(&args.repeat) {
+        bail!("--repeat must be in 1..={MAX_REPEAT} (got {})", args.repeat);
     }
     let fmm = FastMarching {
         order: Order::from_number(args.order)?,
@@ -93,7 +104,7 @@ fn main() -> Result<()> {
         source_radius: args.source_radius,
     };
     let goal = args.goal.as_deref().map(parse_cell).transpose()?;
-    let mut times = Vec::with_capacity(args.repeat);
+    let mut times = Vec::new();
     match load(&args.grid)? {
         Input::Two(grid, maze_goal) => {
             let goal = match goal.as_deref() {

@@ -12,7 +12,7 @@
 //! cargo run --release --example maze_nav -- --generator perfect --size 41 --count 50 --png out.png --paths paths.json
 //! ```
 
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
 use clap::Parser;
 use envfield::eikonal::GraphDistance;
 use envfield::grid::{
@@ -69,12 +69,10 @@ struct Args {
     /// --relays), octile and octile-relay (the octile distance, blind to walls: the control),
     /// hyper (the hypernetwork field), vin (the VIN baseline, one network pass per step), fmm
     /// (fast-marching field descent), graph (exact graph-distance field descent), astar.
-    #[arg(
-        long,
-        value_delimiter = ',',
-        default_value = "field,relay,octile-relay,vin,astar,fmm"
-    )]
-    planner: Vec<PlannerKind>,
+    /// Default: field,relay,octile-relay,vin,astar,fmm, where a learned planner without a model
+    /// for the maze size is left out with a note.
+    #[arg(long, value_delimiter = ',')]
+    planner: Option<Vec<PlannerKind>>,
     /// For `relay`: how many times a failing descent may be split in two at the cell where
     /// the start's and the goal's predicted fields meet (each split, one more prediction).
     #[arg(long, default_value_t = 1)]
@@ -114,6 +112,15 @@ struct Args {
     /// Write every planned path to this JSON file.
     #[arg(long)]
     paths: Option<PathBuf>,
+}
+
+/// Why a learned planner could not be built: its model, or the planner itself.
+#[derive(Debug, thiserror::Error)]
+enum LoadError {
+    #[error(transparent)]
+    Nets(#[from] NetsError),
+    #[error(transparent)]
+    Plan(#[from] envfield::plan::PlanError),
 }
 
 struct Suite {
@@ -182,9 +189,49 @@ fn print_profile(label: &str, planner: &str, p: &DecisionProfile, json: bool) ->
     Ok(())
 }
 
+/// The planners of a run without `--planner`.
+const DEFAULT_PLANNERS: [PlannerKind; 6] = [
+    PlannerKind::Field,
+    PlannerKind::Relay,
+    PlannerKind::OctileRelay,
+    PlannerKind::Vin,
+    PlannerKind::AStar,
+    PlannerKind::Fmm,
+];
+
+/// Generated mazes and random pairs per maze beyond which a run is refused: far more than any
+/// table needs, and a typo past them would run for days.
+const MAX_MAZES: usize = 1_000_000;
+const MAX_PAIRS: usize = 100_000;
+const MAX_EVALUATIONS: usize = 10_000_000;
+
 fn main() -> Result<()> {
     let args = Args::parse();
     let (rule, kind) = (args.rule, args.generator);
+    if args.count > MAX_MAZES || args.pairs > MAX_PAIRS {
+        bail!(
+            "--count {} or --pairs {} is more than this tool does (at most {MAX_MAZES} mazes \
+             and {MAX_PAIRS} pairs per maze)",
+            args.count,
+            args.pairs
+        );
+    }
+    if args.count.saturating_mul(args.pairs) > MAX_EVALUATIONS {
+        bail!(
+            "--count {} x --pairs {} is more than {MAX_EVALUATIONS} evaluations",
+            args.count,
+            args.pairs
+        );
+    }
+    if args.count == 0 || args.pairs == 0 {
+        bail!("--count and --pairs must be at least 1: zero pairs has no success rate");
+    }
+    // Output paths are checked before the work, not after it.
+    for out in [&args.paths, &args.png].into_iter().flatten() {
+        envfield::grid::check_writable(out)?;
+    }
+    let explicit_planners = args.planner.is_some();
+    let planners = args.planner.clone().unwrap_or(DEFAULT_PLANNERS.to_vec());
     let suites: Vec<Suite> = match (&args.mazes, args.size) {
         (Some(file), _) => vec![Suite {
             label: file
@@ -243,20 +290,27 @@ fn main() -> Result<()> {
             .mazes
             .first()
             .map_or(0, |m| m.grid.rows().max(m.grid.cols()));
-        let choices: Vec<NamedPlanner> = args
-            .planner
-            .iter()
-            .map(|kind| {
-                kind.build(&options, |family| {
-                    source.load(family, size).map_err(|e| match e {
-                        NetsError::ModelNotFound { .. } => anyhow::anyhow!(
-                            "{e} (train one with the command in models/README.md, or pass --model)"
-                        ),
-                        other => other.into(),
-                    })
-                })
-            })
-            .collect::<Result<_>>()?;
+        let mut choices: Vec<NamedPlanner> = Vec::new();
+        for kind in &planners {
+            let built = kind.build(&options, |family| {
+                let file = source.resolve(family, size);
+                if let Ok(file) = &file {
+                    eprintln!("{} {kind}: {}", suite.label, file.display());
+                }
+                source.load(family, size).map_err(LoadError::from)
+            });
+            match built {
+                Ok(choice) => choices.push(choice),
+                // A default run leaves out a learned planner that has no model for the size.
+                Err(LoadError::Nets(NetsError::ModelNotFound { .. })) if !explicit_planners => {
+                    eprintln!("{}: no {kind} model for size {size}; left out", suite.label)
+                }
+                Err(LoadError::Nets(e @ NetsError::ModelNotFound { .. })) => {
+                    bail!("{e} (train one with the command in models/README.md, or pass --model)")
+                }
+                Err(e) => return Err(e.into()),
+            }
+        }
         for choice in &choices {
             let bar = indicatif::ProgressBar::new(0).with_message(format!(
                 "{} {}",
@@ -272,6 +326,13 @@ fn main() -> Result<()> {
                 bar.set_position(done as u64);
             })?;
             bar.finish_and_clear();
+            if report.summary.pairs == 0 {
+                bail!(
+                    "{}: no (start, goal) pair to evaluate: no maze has an S and a G, or two \
+                     free cells that connect",
+                    suite.label
+                );
+            }
             if let Some(png) = &args.png {
                 if lines.is_empty() {
                     draw(png, choice, &suite.mazes, &report, rule)?;

@@ -158,6 +158,30 @@ fn main() -> Result<()> {
         .collect::<Result<_>>()?;
     let rule = target.rule();
     let single = args.arch.learns_one_scene();
+    if args.mazes == 0 || args.goals_per_maze == 0 {
+        bail!("--mazes and --goals-per-maze must be at least 1: there is nothing to train on");
+    }
+    if args.mazes.saturating_mul(args.goals_per_maze) > 10_000_000 {
+        bail!(
+            "--mazes {} x --goals-per-maze {} is more than 10,000,000 samples per size",
+            args.mazes,
+            args.goals_per_maze
+        );
+    }
+    if args.resume.is_none() && (args.steps == 0 || args.stop_at == Some(0)) {
+        bail!(
+            "--steps 0 or --stop-at 0 trains nothing: a fresh run takes at least one step \
+             ({} is left as it is)",
+            args.out.display()
+        );
+    }
+    // The outputs are checked before the data is made and the network trained.
+    if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    let ckpt = PathBuf::from(format!("{}.ckpt", args.out.display()));
+    envfield::grid::check_writable(&args.out)?;
+    envfield::grid::check_writable(&ckpt)?;
     if single && sizes.len() > 1 {
         bail!("--arch {} learns one maze: give one --size", args.arch);
     }
@@ -230,7 +254,10 @@ fn main() -> Result<()> {
         };
         validation.push(held_out);
     }
-    let first = &datasets[0].samples[0];
+    let first = datasets
+        .first()
+        .and_then(|d| d.samples.first())
+        .context("the training data came out empty")?;
     let mut trainer = match resumed {
         Some(mut t) => {
             // The checkpoint's config, with the flags that apply to a resumed run.
@@ -311,10 +338,6 @@ fn main() -> Result<()> {
         datasets[0].samples.len()
     );
     eprintln!("{net_info}");
-    if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    }
-    let ckpt = PathBuf::from(format!("{}.ckpt", args.out.display()));
     let bar = ProgressBar::new(trainer.config().steps);
     bar.set_style(ProgressStyle::with_template(
         "{bar:30} {pos}/{len} steps {elapsed_precise} (eta {eta}) {msg}",
@@ -356,11 +379,17 @@ fn main() -> Result<()> {
     // The moving average of the weights when one is kept.
     let net = trainer.averaged_net()?;
     net.save(&args.out)?;
-    eprintln!(
-        "saved {} (checkpoint {})",
-        args.out.display(),
-        ckpt.display()
-    );
+    match summary.is_some() {
+        true => eprintln!(
+            "saved {} (checkpoint {})",
+            args.out.display(),
+            ckpt.display()
+        ),
+        false => eprintln!(
+            "saved {} (no step taken, no checkpoint written)",
+            args.out.display()
+        ),
+    }
     if let Some(summary) = summary {
         println!("{}", serde_json::to_string(&summary)?);
     }
@@ -383,13 +412,19 @@ fn main() -> Result<()> {
             seed: 7,
         };
         let report = evaluate(&planner, &mazes, &eval, &mut |_, _| {})?;
-        println!(
-            "{{\"size\":{size},\"validation_l1\":{val_loss:.5},\"success_rate\":{:.2},\"path_ratio\":{:.4},\"pairs\":{},\"ms_per_path\":{:.3}}}",
-            report.summary.success_rate,
-            report.summary.path_ratio,
-            report.summary.pairs,
-            report.summary.ms_per_path
-        );
+        // No pair (--eval-mazes 0) has no success rate; a ratio without a success is null.
+        let s = &report.summary;
+        let finite = |x: f64| x.is_finite().then_some(x);
+        let rate = (s.pairs > 0).then_some(s.success_rate);
+        let line = serde_json::json!({
+            "size": size,
+            "validation_l1": val_loss,
+            "success_rate": rate,
+            "path_ratio": finite(s.path_ratio),
+            "pairs": s.pairs,
+            "ms_per_path": (s.pairs > 0).then_some(s.ms_per_path),
+        });
+        println!("{line}");
     }
     Ok(())
 }

@@ -6,7 +6,7 @@
 //! cargo run --release --example train_vin -- --size 28 --steps 5000 --resume models/vin_28.safetensors.ckpt --out models/vin_28.safetensors
 //! ```
 
-use anyhow::Result;
+use anyhow::{bail, Context, Result};
 use clap::Parser;
 use envfield::grid::MoveRule;
 use envfield::mazes::{GeneratorKind, MazeGenerator};
@@ -26,7 +26,7 @@ struct Args {
     size: usize,
     /// gridworld, crossings, rooms or perfect.
     #[arg(long, default_value = "gridworld")]
-    generator: String,
+    generator: GeneratorKind,
     /// Training mazes (VIN used 5000 per size).
     #[arg(long, default_value_t = 5000)]
     mazes: usize,
@@ -58,7 +58,23 @@ struct Args {
 
 fn main() -> Result<()> {
     let args = Args::parse();
-    let generator = MazeGenerator::new(args.generator.parse::<GeneratorKind>()?, args.size)?;
+    if args.resume.is_none() && args.steps == 0 {
+        bail!(
+            "--steps 0 trains nothing: a fresh run takes at least one step ({} is left as it is)",
+            args.out.display()
+        );
+    }
+    if args.mazes == 0 {
+        bail!("--mazes must be at least 1: there is nothing to train on");
+    }
+    // The outputs are checked before any work.
+    if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    let ckpt = PathBuf::from(format!("{}.ckpt", args.out.display()));
+    envfield::grid::check_writable(&args.out)?;
+    envfield::grid::check_writable(&ckpt)?;
+    let generator = MazeGenerator::new(args.generator, args.size)?;
     let mazes = generator.generate_many(args.mazes, args.seed)?;
     let examples = vin_examples(&mazes, MoveRule::Vin, args.seed)?;
     let cfg = VinTrainConfig {
@@ -69,13 +85,23 @@ fn main() -> Result<()> {
         seed: args.seed,
     };
     let mut trainer = match &args.resume {
-        Some(p) => VinTrainer::resume(p, cfg)?,
+        Some(p) => {
+            let t = VinTrainer::resume(p, cfg)?;
+            // K is set by the maze size: a checkpoint of another size is another network.
+            let want = VinConfig::for_size(args.size).iterations;
+            let k = t.net().config().iterations;
+            if k != want {
+                bail!(
+                    "{} is a VIN with K = {k} iterations, not the K = {want} of --size {}: resume \
+                     it with the size it was trained for",
+                    p.display(),
+                    args.size
+                );
+            }
+            t
+        }
         None => VinTrainer::new(Vin::new(VinConfig::for_size(args.size), args.seed)?, cfg)?,
     };
-    if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir)?;
-    }
-    let ckpt = PathBuf::from(format!("{}.ckpt", args.out.display()));
     eprintln!(
         "VIN K={} {} parameters, {} examples, from step {}",
         trainer.net().config().iterations,
@@ -114,15 +140,17 @@ fn main() -> Result<()> {
         seed: 7,
     };
     let report = evaluate(&PolicyWalk(&net), &held_out, &eval, &mut |_, _| {})?;
-    println!(
-        "{{\"size\":{},\"steps\":{},\"seconds\":{:.1},\"loss\":{:.4},\"success_rate\":{:.2},\"path_ratio\":{:.4},\"ms_per_path\":{:.3}}}",
-        args.size,
-        args.steps,
-        seconds,
-        recent,
-        report.summary.success_rate,
-        report.summary.path_ratio,
-        report.summary.ms_per_path
-    );
+    // No pair has no success rate, and a ratio without a success is null (JSON has no NaN).
+    let s = &report.summary;
+    let line = serde_json::json!({
+        "size": args.size,
+        "steps": args.steps,
+        "seconds": seconds,
+        "loss": recent,
+        "success_rate": (s.pairs > 0).then_some(s.success_rate),
+        "path_ratio": s.path_ratio.is_finite().then_some(s.path_ratio),
+        "ms_per_path": (s.pairs > 0).then_some(s.ms_per_path),
+    });
+    println!("{line}");
     Ok(())
 }

@@ -123,6 +123,32 @@ impl FastMarching {
         }
     }
 
+    /// Distances past f32's range (a huge spacing, or tiny speeds) would come out as NaN or as
+    /// an infinity that reads "unreachable": refuse them rather than return them.
+    fn check_finite(&self, values: &[f32]) -> Result<()> {
+        if values.iter().any(|v| v.is_nan()) {
+            return Err(EikonalError::InvalidConfig(format!(
+                "distances overflow f32 with spacing {} on this grid (and its speeds): use a \
+                 smaller spacing or larger speeds",
+                self.spacing
+            )));
+        }
+        Ok(())
+    }
+
+    /// With unit speed no distance exceeds `spacing x cells x 2`: refuse a spacing for which
+    /// that bound leaves f32's range (a distance past it would read as unreachable).
+    fn check_range(&self, cells: usize) -> Result<()> {
+        if self.spacing as f64 * cells as f64 * 2.0 > f32::MAX as f64 {
+            return Err(EikonalError::InvalidConfig(format!(
+                "spacing {} is too large for a grid of {cells} cells: distances would overflow \
+                 f32",
+                self.spacing
+            )));
+        }
+        Ok(())
+    }
+
     fn validate(&self) -> Result<()> {
         if !(self.spacing.is_finite() && self.spacing > 0.0) {
             return Err(EikonalError::InvalidConfig(format!(
@@ -163,6 +189,9 @@ impl FastMarching {
         options: SolveOptions2<'_>,
     ) -> Result<Field2> {
         self.validate()?;
+        if options.speed.is_none() {
+            self.check_range(grid.len())?;
+        }
         let shape = format!("{}x{}", grid.rows(), grid.cols());
         check_size([grid.rows(), grid.cols()], &shape)?;
         if !grid.obstacles().contains(&false) {
@@ -198,6 +227,7 @@ impl FastMarching {
             second_order: self.order == Order::Second,
             source_radius: self.source_radius,
         });
+        self.check_finite(&values)?;
         Ok(Field2::new(grid.rows(), grid.cols(), values)?)
     }
 
@@ -220,6 +250,9 @@ impl FastMarching {
         options: SolveOptions3<'_>,
     ) -> Result<Field3> {
         self.validate()?;
+        if options.speed.is_none() {
+            self.check_range(grid.len())?;
+        }
         let [nx, ny, nz] = grid.shape();
         let shape = format!("{nx}x{ny}x{nz}");
         check_size(grid.shape(), &shape)?;
@@ -257,6 +290,7 @@ impl FastMarching {
             second_order: self.order == Order::Second,
             source_radius: self.source_radius,
         });
+        self.check_finite(&values)?;
         Ok(Field3::new(grid.shape(), values)?)
     }
 

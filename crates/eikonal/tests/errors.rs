@@ -132,3 +132,35 @@ fn a_stop_cell_outside_the_grid_is_an_error() {
     );
     assert!(e.is_err());
 }
+
+/// A spacing whose distances leave f32's range is refused, never returned as NaN or as
+/// "unreachable"; with a speed map the overflow is caught on the result.
+#[test]
+fn distances_that_overflow_f32_are_errors() {
+    let grid = Grid2::new(40, 40).unwrap();
+    let huge = FastMarching {
+        spacing: 1e38,
+        ..FastMarching::default()
+    };
+    let err = huge
+        .solve2(&grid, &[Cell2::new(20, 20)])
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("overflow"), "{err}");
+    let fine = FastMarching {
+        spacing: 1e30,
+        ..FastMarching::default()
+    };
+    let field = fine.solve2(&grid, &[Cell2::new(20, 20)]).unwrap();
+    assert!(field.values().iter().all(|v| v.is_finite()));
+    let slow = Field2::new(40, 40, vec![1e-37; 1600]).unwrap();
+    let options = SolveOptions2 {
+        speed: Some(&slow),
+        ..SolveOptions2::default()
+    };
+    let out = FastMarching::default().solve2_with(&grid, &[Cell2::new(20, 20)], options);
+    match out {
+        Err(e) => assert!(e.to_string().contains("overflow"), "{e}"),
+        Ok(f) => assert!(f.values().iter().all(|v| !v.is_nan())),
+    }
+}

@@ -1,52 +1,135 @@
 use crate::{GridError, Result};
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-/// Writes `bytes` to `path` atomically: into a temporary file in the same folder, flushed to
-/// disk, then renamed over `path`. A reader never sees a half-written file, and an existing file
-/// is only replaced once the new one is complete.
+/// The folder a file at `path` goes in (`.` for a bare file name).
+fn folder_of(path: &Path) -> PathBuf {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    }
+}
+
+/// Writes `bytes` to `path` atomically: into a new temporary file in the same folder, created
+/// exclusively under an unpredictable name (so a file or link planted there is never written
+/// through), flushed to disk, then renamed over `path`. A reader never sees a half-written
+/// file, an existing file is only replaced once the new one is complete, and a symbolic link
+/// at `path` is replaced rather than followed.
 ///
 /// # Errors
-/// [`GridError::Io`] naming the path.
+/// [`GridError::Io`] naming the path; [`GridError::Invalid`] for a path that names a folder.
 pub fn write_atomic(path: impl AsRef<Path>, bytes: &[u8]) -> Result<()> {
     let path = path.as_ref();
-    let file_name = path
-        .file_name()
-        .ok_or_else(|| GridError::Invalid(format!("{} is not a file path", path.display())))?;
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-        _ => std::path::PathBuf::from("."),
-    };
-    let tmp = dir.join(format!(
-        ".{}.{}.tmp",
-        file_name.to_string_lossy(),
-        std::process::id()
-    ));
+    check_writable(path)?;
     let result = (|| {
-        let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        std::fs::rename(&tmp, path)
+        let mut tmp = tempfile::Builder::new()
+            .prefix(".envfield-")
+            .suffix(".tmp")
+            .tempfile_in(folder_of(path))?;
+        tmp.write_all(bytes)?;
+        tmp.as_file().sync_all()?;
+        tmp.persist(path).map_err(|e| e.error)?;
+        Ok(())
     })();
-    if let Err(e) = result {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(GridError::io(path, e));
+    result.map_err(|e: std::io::Error| GridError::io(path, e))
+}
+
+/// Checks, before any work, that a file could be written at `path`: it names a file (not a
+/// folder), its folder exists, and a file can be created there. Call it on output paths
+/// before a long computation, so a typo fails at once rather than after the work.
+///
+/// # Errors
+/// [`GridError::Invalid`] for a folder or a path without a file name; [`GridError::Io`]
+/// naming the path when its folder is missing or cannot be written.
+pub fn check_writable(path: impl AsRef<Path>) -> Result<()> {
+    let path = path.as_ref();
+    if path.file_name().is_none()
+        || path.is_dir()
+        || path.as_os_str().to_string_lossy().ends_with('/')
+    {
+        return Err(GridError::Invalid(format!(
+            "{} is a folder, not a file path",
+            path.display()
+        )));
     }
-    Ok(())
+    let dir = folder_of(path);
+    if !dir.is_dir() {
+        return Err(GridError::io(
+            path,
+            std::io::Error::new(
+                std::io::ErrorKind::NotFound,
+                format!("folder {} does not exist", dir.display()),
+            ),
+        ));
+    }
+    tempfile::Builder::new()
+        .prefix(".envfield-")
+        .tempfile_in(&dir)
+        .map(drop)
+        .map_err(|e| GridError::io(path, e))
 }
 
 #[cfg(test)]
 mod tests {
+    use super::*;
+
+    fn dir(name: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!("envfield-{name}-{}", std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
     #[test]
     fn replaces_and_leaves_no_temporary_file() {
-        let dir = std::env::temp_dir().join(format!("envfield-atomic-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = dir("atomic");
         let p = dir.join("x.txt");
-        super::write_atomic(&p, b"one").unwrap();
-        super::write_atomic(&p, b"two").unwrap();
+        write_atomic(&p, b"one").unwrap();
+        write_atomic(&p, b"two").unwrap();
         assert_eq!(std::fs::read(&p).unwrap(), b"two");
         assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1);
-        assert!(super::write_atomic(dir.join("missing/x.txt"), b"").is_err());
+        assert!(write_atomic(dir.join("missing/x.txt"), b"").is_err());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_planted_link_is_never_written_through() {
+        let dir = dir("atomic-link");
+        let victim = dir.join("victim.txt");
+        std::fs::write(&victim, b"keep me").unwrap();
+        // The old writer's temporary name, planted as a link to the victim.
+        let out = dir.join("f.npy");
+        let planted = dir.join(format!(".f.npy.{}.tmp", std::process::id()));
+        std::os::unix::fs::symlink(&victim, &planted).unwrap();
+        // And a link at the output path itself: it is replaced, not followed.
+        let linked_out = dir.join("g.npy");
+        std::os::unix::fs::symlink(&victim, &linked_out).unwrap();
+        write_atomic(&out, b"new").unwrap();
+        write_atomic(&linked_out, b"new").unwrap();
+        assert_eq!(std::fs::read(&victim).unwrap(), b"keep me");
+        assert_eq!(std::fs::read(&out).unwrap(), b"new");
+        assert!(!std::fs::symlink_metadata(&linked_out)
+            .unwrap()
+            .file_type()
+            .is_symlink());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn output_paths_are_checked_before_the_work() {
+        let dir = dir("writable");
+        assert!(check_writable(dir.join("ok.json")).is_ok());
+        let err = check_writable(dir.join("missing/p.json"))
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("missing"), "{err}");
+        let err = check_writable(&dir).unwrap_err().to_string();
+        assert!(err.contains("folder"), "{err}");
+        assert_eq!(
+            std::fs::read_dir(&dir).unwrap().count(),
+            0,
+            "no file left behind"
+        );
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

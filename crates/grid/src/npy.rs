@@ -190,10 +190,7 @@ impl NpyArray {
     pub fn read(path: impl AsRef<Path>) -> Result<Self> {
         let path = path.as_ref();
         let bytes = std::fs::read(path).map_err(|e| GridError::io(path, e))?;
-        Self::from_bytes(&bytes).map_err(|e| match e {
-            GridError::Npy(m) => GridError::Npy(format!("{}: {m}", path.display())),
-            other => other,
-        })
+        Self::from_bytes(&bytes).map_err(|e| named(path, e))
     }
 
     /// Writes an `.npy` file atomically.
@@ -263,7 +260,10 @@ impl Grid2 {
     /// # Errors
     /// [`GridError::Io`] or [`GridError::Npy`].
     pub fn read_npy(path: impl AsRef<Path>) -> Result<Self> {
-        let (shape, mask) = NpyArray::read(path)?.obstacle_mask(2)?;
+        let path = path.as_ref();
+        let (shape, mask) = NpyArray::read(path)?
+            .obstacle_mask(2)
+            .map_err(|e| named(path, e))?;
         Grid2::from_obstacles(shape[0], shape[1], mask)
     }
 
@@ -286,7 +286,10 @@ impl Grid3 {
     /// # Errors
     /// [`GridError::Io`] or [`GridError::Npy`].
     pub fn read_npy(path: impl AsRef<Path>) -> Result<Self> {
-        let (shape, mask) = NpyArray::read(path)?.obstacle_mask(3)?;
+        let path = path.as_ref();
+        let (shape, mask) = NpyArray::read(path)?
+            .obstacle_mask(3)
+            .map_err(|e| named(path, e))?;
         Grid3::from_obstacles([shape[0], shape[1], shape[2]], mask)
     }
 
@@ -309,7 +312,10 @@ impl Field2 {
     /// # Errors
     /// [`GridError::Io`] or [`GridError::Npy`].
     pub fn read_npy(path: impl AsRef<Path>) -> Result<Self> {
-        let (shape, values) = NpyArray::read(path)?.values(2)?;
+        let path = path.as_ref();
+        let (shape, values) = NpyArray::read(path)?
+            .values(2)
+            .map_err(|e| named(path, e))?;
         Field2::new(shape[0], shape[1], values)
     }
 
@@ -332,7 +338,10 @@ impl Field3 {
     /// # Errors
     /// [`GridError::Io`] or [`GridError::Npy`].
     pub fn read_npy(path: impl AsRef<Path>) -> Result<Self> {
-        let (shape, values) = NpyArray::read(path)?.values(3)?;
+        let path = path.as_ref();
+        let (shape, values) = NpyArray::read(path)?
+            .values(3)
+            .map_err(|e| named(path, e))?;
         Field3::new([shape[0], shape[1], shape[2]], values)
     }
 
@@ -346,6 +355,14 @@ impl Field3 {
             data: NpyData::F32(self.values().to_vec()),
         }
         .write(path)
+    }
+}
+
+/// `e` with the file it concerns in its message.
+fn named(path: &Path, e: GridError) -> GridError {
+    match e {
+        GridError::Npy(m) => GridError::Npy(format!("{}: {m}", path.display())),
+        other => other,
     }
 }
 

@@ -5,16 +5,56 @@ use crate::{Cell2, Field2, Grid2, GridError, Result};
 use image::{ImageEncoder, Rgb, RgbImage};
 use std::path::Path;
 
+/// The most pixels [`Grid2::from_png_bytes`] decodes (16384 x 16384).
+pub const MAX_PNG_PIXELS: u64 = 1 << 28;
+
+/// Decoder limits that bound the memory an image may claim.
+fn limits_for_grids() -> image::Limits {
+    let mut limits = image::Limits::default();
+    limits.max_alloc = Some(8 * MAX_PNG_PIXELS);
+    limits
+}
+
 impl Grid2 {
     /// Reads a grid from an image: pixels darker than mid-grey (luma < 128) are obstacles, one
     /// pixel a cell.
     ///
     /// # Errors
-    /// [`GridError::Io`] or [`GridError::Image`].
+    /// [`GridError::Io`]; [`GridError::Invalid`] naming the file for one that is not a readable
+    /// image or holds more than [`MAX_PNG_PIXELS`] pixels.
     pub fn read_png(path: impl AsRef<Path>) -> Result<Self> {
         let path = path.as_ref();
         let bytes = std::fs::read(path).map_err(|e| GridError::io(path, e))?;
-        let img = image::load_from_memory(&bytes)?.to_luma8();
+        Self::from_png_bytes(&bytes, path)
+    }
+
+    /// Decodes image bytes as [`Grid2::read_png`] does; `source` names them in errors. The
+    /// size is read from the header and checked before any pixel is decoded.
+    ///
+    /// # Errors
+    /// [`GridError::Invalid`] naming `source` for bytes that are not a readable image, or an
+    /// image of more than [`MAX_PNG_PIXELS`] pixels.
+    pub fn from_png_bytes(bytes: &[u8], source: impl AsRef<Path>) -> Result<Self> {
+        let path = source.as_ref();
+        let bad =
+            |e: String| GridError::Invalid(format!("{}: not a readable PNG: {e}", path.display()));
+        let reader = || -> Result<_> {
+            let mut r = image::ImageReader::new(std::io::Cursor::new(bytes))
+                .with_guessed_format()
+                .map_err(|e| bad(e.to_string()))?;
+            r.limits(limits_for_grids());
+            Ok(r)
+        };
+        let (w, h) = reader()?
+            .into_dimensions()
+            .map_err(|e| bad(e.to_string()))?;
+        if w as u64 * h as u64 > MAX_PNG_PIXELS {
+            return Err(bad(format!("{w}x{h} is more than {MAX_PNG_PIXELS} pixels")));
+        }
+        let img = reader()?
+            .decode()
+            .map_err(|e| bad(e.to_string()))?
+            .to_luma8();
         let (w, h) = img.dimensions();
         let mask = img.pixels().map(|p| p.0[0] < 128).collect();
         Grid2::from_obstacles(h as usize, w as usize, mask)

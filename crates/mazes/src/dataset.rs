@@ -122,10 +122,11 @@ impl Dataset {
     /// # Errors
     /// [`MazeError::InvalidConfig`] for an out-of-range setting; generator errors.
     pub fn generate(cfg: &DatasetConfig) -> Result<Self> {
-        if cfg.goals_per_maze == 0 || !(0.0..0.9).contains(&cfg.extra_obstacles) {
+        if cfg.mazes == 0 || cfg.goals_per_maze == 0 || !(0.0..0.9).contains(&cfg.extra_obstacles) {
             return Err(MazeError::InvalidConfig(format!(
-                "goals_per_maze must be >= 1 and extra_obstacles in [0, 0.9) (got {}, {})",
-                cfg.goals_per_maze, cfg.extra_obstacles
+                "a dataset needs mazes >= 1, goals_per_maze >= 1 and extra_obstacles in [0, 0.9) \
+                 (got {}, {}, {})",
+                cfg.mazes, cfg.goals_per_maze, cfg.extra_obstacles
             )));
         }
         let per_maze: Result<Vec<Vec<Sample>>> = (0..cfg.mazes)
@@ -310,6 +311,11 @@ mod tests {
         };
         let ds = Dataset::generate(&cfg).unwrap();
         assert_eq!(ds.samples.len(), 12);
+        let none = DatasetConfig { mazes: 0, ..cfg };
+        assert!(Dataset::generate(&none)
+            .unwrap_err()
+            .to_string()
+            .contains("mazes >= 1"));
         assert_eq!(ds, Dataset::generate(&cfg).unwrap());
         for s in &ds.samples {
             let gi = s.grid.index(s.goal).unwrap();

@@ -1,6 +1,6 @@
 //! The networks' configs: which architecture, with its settings.
 
-use crate::layers::{validate_convs, ConvSpec, MlpConfig};
+use crate::layers::{validate_convs, ConvSpec, MlpConfig, MAX_CONVS};
 use crate::{NetsError, Result, TargetEncoding};
 use serde::{Deserialize, Serialize};
 
@@ -387,11 +387,6 @@ impl std::str::FromStr for Arch {
             })
     }
 }
-
-/// The most convolutions [`parse_convs`] builds: far beyond any encoder that trains here, and
-/// small enough that a mistyped repeat count is an error rather than an allocation that
-/// cannot succeed.
-const MAX_CONVS: usize = 1024;
 
 /// Convolutions from `CHANNELS:DILATION` items separated by commas (`:DILATION` may be left
 /// out for 1), where `Nx[ITEMS]` repeats a group N times. The form the `train_maze` example's

@@ -50,9 +50,12 @@ impl Default for MlpConfig {
 
 impl MlpConfig {
     pub(crate) fn validate(&self, what: &str) -> Result<()> {
-        if self.hidden == 0 || self.layers == 0 || self.fourier > 16 {
+        if !(1..=MAX_CHANNELS).contains(&self.hidden)
+            || !(1..=MAX_CONVS).contains(&self.layers)
+            || self.fourier > 16
+        {
             return Err(NetsError::InvalidConfig(format!(
-                "{what}: hidden and layers must be >= 1 and fourier <= 16 (got {}, {}, {})",
+                "{what}: hidden in 1..=4096, layers in 1..=1024 and fourier <= 16 (got {}, {}, {})",
                 self.hidden, self.layers, self.fourier
             )));
         }
@@ -356,14 +359,30 @@ impl ConvStack {
     }
 }
 
+/// Bounds on an encoder: far beyond what trains on one machine, small enough that a typo is an
+/// error and not an allocation that cannot succeed.
+pub(crate) const MAX_CONVS: usize = 1024;
+const MAX_CHANNELS: usize = 4096;
+const MAX_DILATION: usize = 1 << 16;
+
 pub(crate) fn validate_convs(specs: &[ConvSpec], what: &str) -> Result<()> {
     if specs.is_empty() {
         return Err(NetsError::InvalidConfig(format!("{what}: no convolution")));
     }
+    if specs.len() > MAX_CONVS {
+        return Err(NetsError::InvalidConfig(format!(
+            "{what}: {} convolutions, at most {MAX_CONVS}",
+            specs.len()
+        )));
+    }
     for (i, s) in specs.iter().enumerate() {
-        if s.channels == 0 || s.dilation == 0 || s.stride == 0 || s.stride > 2 {
+        if !(1..=MAX_CHANNELS).contains(&s.channels)
+            || !(1..=MAX_DILATION).contains(&s.dilation)
+            || !(1..=2).contains(&s.stride)
+        {
             return Err(NetsError::InvalidConfig(format!(
-                "{what}: convolution {i} needs channels >= 1, dilation >= 1, stride 1 or 2 (got {s:?})"
+                "{what}: convolution {i} needs channels in 1..={MAX_CHANNELS}, dilation in \
+                 1..={MAX_DILATION}, stride 1 or 2 (got {s:?})"
             )));
         }
     }

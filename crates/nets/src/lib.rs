@@ -57,6 +57,6 @@ pub use envfield_grid::FieldModel;
 pub use error::{NetsError, Result};
 pub use files::model_file;
 pub use layers::{Activation, ConvSpec, MlpConfig};
-pub use net::{BoundField, FieldNet};
+pub use net::{BoundField, FieldNet, MAX_FIELD_CELLS};
 pub use train::{validation_loss, DataCheck, Progress, TrainConfig, TrainSummary, Trainer};
 pub use vin::{vin_examples, Vin, VinConfig, VinExample, VinTrainConfig, VinTrainer};

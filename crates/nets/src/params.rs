@@ -8,6 +8,10 @@ use safetensors::tensor::{Dtype, SafeTensors, TensorView};
 use std::collections::HashMap;
 use std::path::Path;
 
+/// The most parameters a network may have (512 MB of f32): a config past it is a typo, and
+/// refusing it beats an allocation that aborts.
+pub(crate) const MAX_PARAMETERS: usize = 1 << 27;
+
 /// How a parameter starts.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) enum Init {
@@ -47,7 +51,16 @@ impl ParamStore {
     /// Creates the parameter `name` of `shape` and returns its tensor (which tracks gradients).
     pub(crate) fn add(&mut self, name: String, shape: &[usize], init: Init) -> Result<Tensor> {
         debug_assert!(!self.names.contains(&name), "duplicate parameter {name}");
-        let n: usize = shape.iter().product();
+        let n = shape
+            .iter()
+            .try_fold(1usize, |a, &d| a.checked_mul(d))
+            .filter(|&n| n <= MAX_PARAMETERS.saturating_sub(self.count()))
+            .ok_or_else(|| {
+                NetsError::InvalidConfig(format!(
+                    "the network would have more than {MAX_PARAMETERS} parameters (at `{name}`, \
+                     shape {shape:?})"
+                ))
+            })?;
         let data: Vec<f32> = match init {
             Init::Zeros => vec![0.0; n],
             Init::Uniform(b) => (0..n)

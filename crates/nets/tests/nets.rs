@@ -685,3 +685,55 @@ fn descent_loss_groups_an_anchor_with_its_moves() {
         .unwrap();
     assert!(summary.loss.is_finite());
 }
+
+/// Sizes past what a machine can hold are refused before anything is allocated.
+#[test]
+fn oversized_requests_are_refused_before_they_allocate() {
+    let net = FieldNet::new(ModelConfig::Context(small_context()), 1).unwrap();
+    let huge = Grid2::new(2048, 1024).unwrap();
+    let err = net.field(&huge, Cell2::new(0, 0)).unwrap_err().to_string();
+    assert!(
+        err.contains("2048x1024") && err.contains("1048576"),
+        "{err}"
+    );
+    for spec in [
+        "100000000x[16:1]",
+        "16:1,2000x[8:2]",
+        "99999999:1",
+        "16:99999999",
+    ] {
+        let err = match envfield_nets::parse_convs(spec) {
+            Err(e) => e.to_string(),
+            Ok(convs) => {
+                let cfg = ContextConfig {
+                    encoder: convs,
+                    ..small_context()
+                };
+                FieldNet::new(ModelConfig::Context(cfg), 0)
+                    .unwrap_err()
+                    .to_string()
+            }
+        };
+        assert!(
+            err.contains("more than") || err.contains("1..="),
+            "{spec}: {err}"
+        );
+    }
+    let too_big = TrainConfig {
+        batch_items: 1 << 20,
+        queries_per_item: 1 << 20,
+        ..TrainConfig::default()
+    };
+    let err = too_big.validate().unwrap_err().to_string();
+    assert!(err.contains("batch_items x queries_per_item"), "{err}");
+    // One field named, not the whole config.
+    let bad_lr = TrainConfig {
+        lr: -1.0,
+        ..TrainConfig::default()
+    };
+    let err = bad_lr.validate().unwrap_err().to_string();
+    assert!(
+        err.contains("lr must be positive") && !err.contains("batch_items"),
+        "{err}"
+    );
+}

@@ -55,7 +55,8 @@ pub struct Summary {
     /// Successful pairs, in percent.
     pub success_rate: f64,
     /// Mean of path length / optimal length over successful pairs (1 = optimal); NaN when none
-    /// succeeded.
+    /// succeeded, written as `null` in JSON (which has no NaN).
+    #[serde(with = "nan_as_null")]
     pub path_ratio: f64,
     /// Mean milliseconds per path, all inference included.
     pub ms_per_path: f64,
@@ -174,8 +175,14 @@ pub fn evaluate_pairs(
         path_ratio: if wins.is_empty() {
             f64::NAN
         } else {
+            // A legal walk is never shorter than the shortest one, so a ratio below 1 is the
+            // f32 rounding of the optimal length (Dijkstra adds up to millions of steps in
+            // f32): it counts as 1. The walk's own length is exact, in f64.
             wins.iter()
-                .map(|r| (r.length / r.optimal_length.max(f32::MIN_POSITIVE)) as f64)
+                .map(|r| {
+                    let optimal = (r.optimal_length as f64).max(f64::MIN_POSITIVE);
+                    (exact_length(&r.path) / optimal).max(1.0)
+                })
                 .sum::<f64>()
                 / wins.len() as f64
         },
@@ -186,4 +193,58 @@ pub fn evaluate_pairs(
         },
     };
     Ok(Report { summary, results })
+}
+
+/// The length of a path of neighbouring cells in f64: straight moves 1, diagonal sqrt 2.
+fn exact_length(path: &[Cell2]) -> f64 {
+    let diagonal = path
+        .windows(2)
+        .filter(|w| w[0].row != w[1].row && w[0].col != w[1].col)
+        .count();
+    let straight = path.len().saturating_sub(1) - diagonal;
+    straight as f64 + diagonal as f64 * std::f64::consts::SQRT_2
+}
+
+/// JSON has no NaN: a figure that is not a number is written as `null` and read back as NaN.
+mod nan_as_null {
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    pub(super) fn serialize<S: Serializer>(x: &f64, s: S) -> Result<S::Ok, S::Error> {
+        match x.is_finite() {
+            true => s.serialize_f64(*x),
+            false => s.serialize_none(),
+        }
+    }
+
+    pub(super) fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+        Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_ratio_of_no_success_is_null_in_json_and_nan_again_when_read() {
+        let summary = Summary {
+            planner: "x".into(),
+            rule: MoveRule::Strict,
+            mazes: 1,
+            pairs: 1,
+            success_rate: 0.0,
+            path_ratio: f64::NAN,
+            ms_per_path: 0.5,
+        };
+        let json = serde_json::to_string(&summary).unwrap();
+        assert!(json.contains("\"path_ratio\":null"), "{json}");
+        let back: Summary = serde_json::from_str(&json).unwrap();
+        assert!(back.path_ratio.is_nan());
+        let ok = Summary {
+            path_ratio: 1.25,
+            ..summary
+        };
+        let back: Summary = serde_json::from_str(&serde_json::to_string(&ok).unwrap()).unwrap();
+        assert_eq!(back.path_ratio, 1.25);
+    }
 }

@@ -75,7 +75,10 @@ pub struct FloorMap {
 
 impl FloorMap {
     /// The map with obstacles grown by a disc of `radius` metres: the cells where the centre
-    /// of a body of that radius can stand. O(obstacle cells x disc cells).
+    /// of a body of that radius can stand, that is the cells farther than `radius` (rounded to
+    /// whole cells) from every obstacle cell. O(cells) for any radius, by an exact Euclidean
+    /// distance transform (Felzenszwalb and Huttenlocher 2012); a radius wider than the map
+    /// blocks every cell of a map with an obstacle.
     ///
     /// # Errors
     /// [`SceneError::InvalidInput`] for a negative or non-finite radius.
@@ -86,24 +89,81 @@ impl FloorMap {
             )));
         }
         let (rows, cols) = (self.grid.rows(), self.grid.cols());
-        let r = (radius / self.frame.resolution).round() as i64;
-        let disc: Vec<(i64, i64)> = (-r..=r)
-            .flat_map(|dr| (-r..=r).map(move |dc| (dr, dc)))
-            .filter(|(dr, dc)| dr * dr + dc * dc <= r * r)
-            .collect();
-        let source = self.grid.obstacles();
-        let mut out = source.to_vec();
-        for (i, _) in source.iter().enumerate().filter(|(_, &o)| o) {
-            let (row, col) = ((i / cols) as i64, (i % cols) as i64);
-            for (dr, dc) in &disc {
-                let (y, x) = (row + dr, col + dc);
-                if y >= 0 && x >= 0 && (y as usize) < rows && (x as usize) < cols {
-                    out[y as usize * cols + x as usize] = true;
-                }
-            }
-        }
+        // Past the map's extent every radius blocks the same cells.
+        let r = ((radius / self.frame.resolution).round() as f64).min((rows + cols) as f64);
+        let d2 = squared_distance_to_obstacles(self.grid.obstacles(), rows, cols);
+        let out = d2.iter().map(|&d| d <= r * r).collect();
         Ok(Grid2::from_obstacles(rows, cols, out)?)
     }
+}
+
+/// The squared Euclidean distance, in cells, from every cell of a `rows x cols` map to the
+/// nearest obstacle cell (0 on obstacles, infinite without any): a column pass, then the lower
+/// envelope of parabolas along each row. Every value is an exact integer.
+fn squared_distance_to_obstacles(obstacles: &[bool], rows: usize, cols: usize) -> Vec<f64> {
+    // Rows to the nearest obstacle in the same column.
+    let mut vertical = vec![f64::INFINITY; rows * cols];
+    for c in 0..cols {
+        let mut last = None;
+        for r in 0..rows {
+            if obstacles[r * cols + c] {
+                last = Some(r);
+            }
+            if let Some(l) = last {
+                vertical[r * cols + c] = (r - l) as f64;
+            }
+        }
+        last = None;
+        for r in (0..rows).rev() {
+            if obstacles[r * cols + c] {
+                last = Some(r);
+            }
+            if let Some(l) = last {
+                let v = &mut vertical[r * cols + c];
+                *v = v.min((l - r) as f64);
+            }
+        }
+    }
+    let mut out = vec![f64::INFINITY; rows * cols];
+    // The parabolas of the envelope (their columns) and where each takes over.
+    let mut apex = vec![0usize; cols];
+    let mut from = vec![0f64; cols + 1];
+    for r in 0..rows {
+        let f = |q: usize| vertical[r * cols + q].powi(2);
+        let meet = |p: usize, q: usize| {
+            ((f(q) + (q * q) as f64) - (f(p) + (p * p) as f64)) / (2.0 * (q as f64 - p as f64))
+        };
+        let mut k = 0usize;
+        for q in (0..cols).filter(|&q| f(q).is_finite()) {
+            // Drop the parabolas that q's hides, then add q's.
+            loop {
+                if k == 0 {
+                    (apex[0], from[0], from[1], k) = (q, f64::NEG_INFINITY, f64::INFINITY, 1);
+                    break;
+                }
+                let s = meet(apex[k - 1], q);
+                if s <= from[k - 1] {
+                    k -= 1;
+                    continue;
+                }
+                (apex[k], from[k], from[k + 1]) = (q, s, f64::INFINITY);
+                k += 1;
+                break;
+            }
+        }
+        if k == 0 {
+            continue;
+        }
+        let mut j = 0;
+        for c in 0..cols {
+            while from[j + 1] < c as f64 {
+                j += 1;
+            }
+            let p = apex[j];
+            out[r * cols + c] = (c as f64 - p as f64).powi(2) + f(p);
+        }
+    }
+    out
 }
 
 /// Renders the top-down depth image of `scene` over its bounding box and marks the deepest
@@ -213,4 +273,47 @@ pub fn free_components(grid: &Grid2) -> (Vec<usize>, Vec<usize>) {
         sizes.push(size);
     }
     (labels, sizes)
+}
+
+#[cfg(test)]
+mod distance_tests {
+    use super::*;
+    use envfield_grid::SplitMix64;
+
+    /// The old way: stamp a disc around every obstacle cell.
+    fn stamped(obstacles: &[bool], rows: usize, cols: usize, r: i64) -> Vec<bool> {
+        let mut out = obstacles.to_vec();
+        for (i, _) in obstacles.iter().enumerate().filter(|(_, &o)| o) {
+            let (row, col) = ((i / cols) as i64, (i % cols) as i64);
+            for dr in -r..=r {
+                for dc in -r..=r {
+                    let (y, x) = (row + dr, col + dc);
+                    let inside = y >= 0 && x >= 0 && (y as usize) < rows && (x as usize) < cols;
+                    if dr * dr + dc * dc <= r * r && inside {
+                        out[y as usize * cols + x as usize] = true;
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn the_transform_blocks_exactly_the_cells_a_stamped_disc_does() {
+        let mut rng = SplitMix64::new(5);
+        for case in 0..60 {
+            let (rows, cols) = (1 + rng.below(23), 1 + rng.below(23));
+            let density = [0.0, 0.01, 0.05, 0.3, 1.0][case % 5];
+            let obstacles: Vec<bool> = (0..rows * cols).map(|_| rng.next_f64() < density).collect();
+            let d2 = squared_distance_to_obstacles(&obstacles, rows, cols);
+            for r in [0i64, 1, 2, 3, 5, 8, 40] {
+                let by_transform: Vec<bool> = d2.iter().map(|&d| d <= (r * r) as f64).collect();
+                assert_eq!(
+                    by_transform,
+                    stamped(&obstacles, rows, cols, r),
+                    "case {case}, {rows}x{cols}, radius {r}"
+                );
+            }
+        }
+    }
 }

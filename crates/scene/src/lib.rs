@@ -42,7 +42,7 @@ pub use error::{Result, SceneError};
 pub use floor::{floor_map, free_components, FloorMap, FloorMapConfig, MapFrame};
 pub use mesh::{write_point_cloud, write_polyline_obj, TriangleMesh};
 pub use room::{generate_room, Furniture, Room, RoomConfig};
-pub use sample::{sample_surface, voxelize, VoxelFrame};
+pub use sample::{sample_surface, voxelize, VoxelFrame, MAX_SURFACE_POINTS};
 pub use scene::{ObjectKind, Part, Primitive, RayHit, Scene, SceneObject, SurfacePoint};
 
 pub use nalgebra;

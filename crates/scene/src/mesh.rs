@@ -147,7 +147,12 @@ impl TriangleMesh {
         Self::parse_obj(&text, path)
     }
 
-    fn parse_obj(text: &str, path: &Path) -> Result<Self> {
+    /// Parses OBJ text as [`TriangleMesh::read_obj`] does; `source` names it in errors.
+    ///
+    /// # Errors
+    /// As [`TriangleMesh::read_obj`], without the I/O.
+    pub fn parse_obj(text: &str, source: impl AsRef<Path>) -> Result<Self> {
+        let path = source.as_ref();
         let err = |line: usize, reason: String| SceneError::Parse {
             path: path.to_path_buf(),
             line,
@@ -218,6 +223,14 @@ impl TriangleMesh {
         let path = path.as_ref();
         let bytes = std::fs::read(path).map_err(|source| io(path, source))?;
         crate::ply::parse(&bytes, path)
+    }
+
+    /// Parses PLY bytes as [`TriangleMesh::read_ply`] does; `source` names them in errors.
+    ///
+    /// # Errors
+    /// As [`TriangleMesh::read_ply`], without the I/O.
+    pub fn parse_ply(bytes: &[u8], source: impl AsRef<Path>) -> Result<Self> {
+        crate::ply::parse(bytes, source.as_ref())
     }
 
     /// Writes a Wavefront OBJ file atomically.

@@ -10,6 +10,9 @@ use serde::{Deserialize, Serialize};
 use crate::error::{Result, SceneError};
 use crate::scene::Scene;
 
+/// The most points [`sample_surface`] draws in one call (about 800 MB of points).
+pub const MAX_SURFACE_POINTS: usize = 1 << 26;
+
 /// `count` points spread uniformly (by area) over the scene's visible surfaces, seeded.
 ///
 /// Points of a part's surface that lie inside another part (a table leg's end in the floor)
@@ -17,11 +20,13 @@ use crate::scene::Scene;
 /// Cost: O(count) signed-distance queries, in parallel.
 ///
 /// # Errors
-/// [`SceneError::InvalidInput`] for an empty scene or `count == 0`, or when the surfaces are
-/// almost entirely hidden inside each other.
+/// [`SceneError::InvalidInput`] for an empty scene, a `count` of 0 or above
+/// [`MAX_SURFACE_POINTS`], or when the surfaces are almost entirely hidden inside each other.
 pub fn sample_surface(scene: &Scene, count: usize, seed: u64) -> Result<Vec<Point3<f32>>> {
-    if count == 0 {
-        return Err(SceneError::InvalidInput("sample at least one point".into()));
+    if !(1..=MAX_SURFACE_POINTS).contains(&count) {
+        return Err(SceneError::InvalidInput(format!(
+            "sample between 1 and {MAX_SURFACE_POINTS} surface points (got {count})"
+        )));
     }
     let mesh = scene.to_mesh();
     let mut cumulative = Vec::with_capacity(mesh.triangles.len());

@@ -29,6 +29,9 @@ enum Net {
     Hyper(Hyper),
 }
 
+/// The most cells [`FieldNet::field`] predicts at once (1024 x 1024, a few GB of features).
+pub const MAX_FIELD_CELLS: usize = 1 << 20;
+
 /// An implicit environment-field network (any of the four architectures), its parameters and
 /// its device. Outputs are in the config's [`crate::TargetEncoding`] (the paper's `1 / (1 + d)`
 /// or `1 - d / scale`, -1 blocked); [`FieldModel::predict`] decodes them into distances.
@@ -319,10 +322,20 @@ impl FieldNet {
     /// are infinite.
     ///
     /// # Errors
-    /// A goal outside the grid or on an obstacle; a grid or goal the network does not accept.
+    /// A goal outside the grid or on an obstacle; a grid or goal the network does not accept;
+    /// a grid of more than [`MAX_FIELD_CELLS`] cells.
     pub fn field(&self, grid: &Grid2, goal: Cell2) -> Result<Field2> {
         grid.check_free(goal, "goal")?;
         self.check_scene(grid, goal)?;
+        if grid.len() > MAX_FIELD_CELLS {
+            return Err(NetsError::InvalidInput(format!(
+                "a {}x{} grid is too large for one field prediction: at most {MAX_FIELD_CELLS} \
+                 cells (1024x1024), as the features of every cell are held at once (about 2.2 \
+                 KB a cell for the default context network)",
+                grid.rows(),
+                grid.cols()
+            )));
+        }
         let raw = self.predict_encoded(&Batch::free_cells(grid, goal))?;
         let encoding = self.config.encoding();
         let mut free = raw.iter();

@@ -128,6 +128,10 @@ impl Default for TrainConfig {
     }
 }
 
+/// Queries in one training step beyond which a config is refused: a typo, not a batch that
+/// fits in memory.
+const MAX_QUERIES_PER_STEP: usize = 1 << 22;
+
 impl TrainConfig {
     /// Checks every setting, in the order of the fields, and names the first that is wrong.
     ///
@@ -141,7 +145,8 @@ impl TrainConfig {
             || self.grouped()
             || self.queries_per_item % 2 == 0;
         let groups = self.descent_weight == 0.0 || self.dense || self.queries_per_item % GROUP == 0;
-        let checks: [(bool, &str, &str, String); 18] = [
+        let per_step = self.batch_items.saturating_mul(self.queries_per_item);
+        let checks: [(bool, &str, &str, String); 19] = [
             (self.lr.is_finite() && self.lr > 0.0, "lr", "must be positive and finite", self.lr.to_string()),
             (unit(self.final_lr_fraction), "final_lr_fraction", "must be in [0, 1]", self.final_lr_fraction.to_string()),
             (below_one(self.betas.0), "betas.0", "must be in [0, 1)", self.betas.0.to_string()),
@@ -150,6 +155,7 @@ impl TrainConfig {
             (self.weight_decay >= 0.0, "weight_decay", "must be >= 0", self.weight_decay.to_string()),
             (self.batch_items > 0, "batch_items", "must be >= 1", self.batch_items.to_string()),
             (self.queries_per_item > 0, "queries_per_item", "must be >= 1", self.queries_per_item.to_string()),
+            (per_step <= MAX_QUERIES_PER_STEP, "batch_items x queries_per_item", "must be at most 4194304 queries per step", per_step.to_string()),
             (self.validation_samples > 0, "validation_samples", "must be >= 1", self.validation_samples.to_string()),
             (self.neighbour_weight >= 0.0, "neighbour_weight", "must be >= 0", self.neighbour_weight.to_string()),
             (pairs, "queries_per_item", "must be even with a neighbour_weight (queries come in pairs)", self.queries_per_item.to_string()),

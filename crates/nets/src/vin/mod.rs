@@ -49,12 +49,17 @@ impl VinConfig {
     }
 
     fn validate(&self) -> Result<()> {
-        if self.hidden == 0 || self.q_channels == 0 || self.iterations == 0 {
-            return Err(NetsError::InvalidConfig(format!(
-                "vin: hidden, q_channels and iterations must be >= 1 (got {self:?})"
-            )));
+        let fields = [
+            ("hidden", self.hidden),
+            ("q_channels", self.q_channels),
+            ("iterations", self.iterations),
+        ];
+        match fields.iter().find(|(_, v)| !(1..=4096).contains(v)) {
+            Some((name, v)) => Err(NetsError::InvalidConfig(format!(
+                "vin: {name} must be in 1..=4096 (got {v})"
+            ))),
+            None => Ok(()),
         }
-        Ok(())
     }
 }
 

@@ -124,14 +124,27 @@ impl VinTrainer {
     /// # Errors
     /// [`NetsError::InvalidConfig`].
     pub fn new(net: Vin, config: VinTrainConfig) -> Result<Self> {
-        if config.lr.is_nan()
-            || config.lr <= 0.0
-            || config.batch_mazes == 0
-            || config.states_per_maze == 0
-        {
-            return Err(NetsError::InvalidConfig(format!(
-                "vin training: {config:?}"
-            )));
+        let bad = |field: &str, rule: &str, value: String| {
+            Err(NetsError::InvalidConfig(format!(
+                "vin training: {field} {rule} (got {value})"
+            )))
+        };
+        if !(config.lr.is_finite() && config.lr > 0.0) {
+            return bad("lr", "must be positive and finite", config.lr.to_string());
+        }
+        if !(1..=4096).contains(&config.batch_mazes) {
+            return bad(
+                "batch_mazes",
+                "must be in 1..=4096",
+                config.batch_mazes.to_string(),
+            );
+        }
+        if !(1..=4096).contains(&config.states_per_maze) {
+            return bad(
+                "states_per_maze",
+                "must be in 1..=4096",
+                config.states_per_maze.to_string(),
+            );
         }
         let optimiser = AdamW::new(net.store.vars(), config.lr, (0.9, 0.999), 1e-8, 0.0)?;
         Ok(Self {
