@@ -4,6 +4,8 @@
 //!
 //! `cargo run --release --example room -- --seed 3 --out out/room`
 //!
+//! `--scene FILE.obj|ply` reads a scene instead of generating one.
+//!
 //! Writes `scene.obj`, `scene.ply`, `points.ply` (surface samples), `floor.png` (the reaching
 //! distance on the floor map with the path), `path.obj` and `walk.json` (the aligned gait) to
 //! `--out`, and prints a JSON summary.
@@ -20,7 +22,7 @@ use envfield::plan::descend;
 use envfield::scene::nalgebra::{distance, Point3};
 use envfield::scene::{
     floor_map, free_components, generate_room, sample_surface, write_point_cloud,
-    write_polyline_obj, FloorMapConfig, RoomConfig,
+    write_polyline_obj, FloorMapConfig, RoomConfig, Scene, TriangleMesh,
 };
 
 #[global_allocator]
@@ -44,24 +46,46 @@ struct Args {
     /// Surface points to sample.
     #[arg(long, default_value_t = 20_000)]
     points: usize,
+    /// A scene to read instead of a generated room: a triangle mesh as OBJ or PLY (metres,
+    /// z up, the floor at its lowest point).
+    #[arg(long)]
+    scene: Option<PathBuf>,
 }
 
 fn main() -> Result<()> {
     let args = Args::parse();
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
+    envfield::grid::check_writable(args.out.join("scene.obj"))?;
     let t = Instant::now();
-    let room = generate_room(&RoomConfig::default(), args.seed)?;
+    // The scene, its size in metres and the kinds of its furniture (none known for a file).
+    let (scene, size, kinds): (Scene, [f32; 2], Vec<String>) = match &args.scene {
+        Some(file) => {
+            let scene = Scene::from_mesh("scene", &TriangleMesh::read(file)?)?;
+            let aabb = scene.aabb().context("the scene is empty")?;
+            let extent = aabb.maxs - aabb.mins;
+            (scene, [extent.x, extent.y], Vec::new())
+        }
+        None => {
+            let room = generate_room(&RoomConfig::default(), args.seed)?;
+            let kinds = room
+                .furniture
+                .iter()
+                .map(|f| format!("{:?}", f.kind).to_lowercase())
+                .collect();
+            (room.scene, room.size, kinds)
+        }
+    };
     let generate_ms = t.elapsed().as_secs_f64() * 1e3;
-    let mesh = room.scene.to_mesh();
+    let mesh = scene.to_mesh();
     mesh.write(args.out.join("scene.obj"))?;
     mesh.write(args.out.join("scene.ply"))?;
-    let points = sample_surface(&room.scene, args.points, args.seed)?;
+    let points = sample_surface(&scene, args.points, args.seed)?;
     write_point_cloud(&points, args.out.join("points.ply"))?;
 
     let t = Instant::now();
     let map = floor_map(
-        &room.scene,
+        &scene,
         &FloorMapConfig {
             resolution: args.resolution,
             ..FloorMapConfig::default()
@@ -136,7 +160,7 @@ fn main() -> Result<()> {
     let length: f32 = cells.windows(2).map(|w| distance(&w[0], &w[1])).sum();
     let t = Instant::now();
     let (aligned, reports) = align_in_scene(
-        &room.scene,
+        &scene,
         &gait,
         &trajectory,
         &AlignConfig {
@@ -165,18 +189,13 @@ fn main() -> Result<()> {
     write_polyline_obj(&lifted, args.out.join("path.obj"))?;
     aligned.write(args.out.join("walk.json"))?;
 
-    let kinds: Vec<String> = room
-        .furniture
-        .iter()
-        .map(|f| format!("{:?}", f.kind).to_lowercase())
-        .collect();
     println!(
         "{}",
         serde_json::json!({
             "seed": args.seed,
-            "room_m": [room.size[0], room.size[1]],
+            "room_m": size,
             "furniture": kinds,
-            "parts": room.scene.objects().iter().map(|o| o.parts().len()).sum::<usize>(),
+            "parts": scene.objects().iter().map(|o| o.parts().len()).sum::<usize>(),
             "triangles": mesh.triangles.len(),
             "floor_map": [map.grid.rows(), map.grid.cols()],
             "free_floor_fraction": map.grid.free_count() as f32 / map.grid.len() as f32,

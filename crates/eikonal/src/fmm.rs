@@ -335,3 +335,74 @@ impl FieldModel for FastMarching {
         Ok(self.solve2(grid, &[goal])?)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bfs2;
+    use envfield_grid::{Neighbourhood2, SplitMix64};
+
+    /// Small enough for Miri (`miri.sh`), which checks the marcher's and the heap's unchecked
+    /// indexing on every cell: random obstacles, a speed map, two sources, both orders, 2D and
+    /// 3D. Sources are 0, the reachable cells (by the 4-connected graph) are finite, the others
+    /// infinite, and no value is below the straight-line distance.
+    #[test]
+    fn small_grids_in_both_orders_and_dimensions() {
+        let mut rng = SplitMix64::new(11);
+        for case in 0..4 {
+            let (rows, cols) = (6 + case, 9 - case);
+            let mut grid = Grid2::new(rows, cols).unwrap();
+            for i in 0..rows * cols {
+                if rng.next_f64() < 0.25 {
+                    grid.set_obstacle(grid.cell(i), true).unwrap();
+                }
+            }
+            let sources = [Cell2::new(0, 0), Cell2::new(rows - 1, cols - 1)];
+            for &s in &sources {
+                grid.set_obstacle(s, false).unwrap();
+            }
+            let reach = bfs2(&grid, &sources, Neighbourhood2::Four).unwrap();
+            let speed = Field2::new(
+                rows,
+                cols,
+                (0..rows * cols).map(|_| 0.5 + rng.next_f32()).collect(),
+            )
+            .unwrap();
+            for order in [Order::First, Order::Second] {
+                let fmm = FastMarching::with_order(order);
+                let options = SolveOptions2 {
+                    speed: Some(&speed),
+                    ..SolveOptions2::default()
+                };
+                for field in [
+                    fmm.solve2(&grid, &sources).unwrap(),
+                    fmm.solve2_with(&grid, &sources, options).unwrap(),
+                ] {
+                    for i in 0..rows * cols {
+                        let c = grid.cell(i);
+                        let (v, r) = (field.get(c).unwrap(), reach.get(c).unwrap());
+                        assert_eq!(v.is_finite(), r.is_finite(), "{c} under {order:?}");
+                        let straight = sources
+                            .iter()
+                            .map(|s| {
+                                let (dr, dc) = (s.row.abs_diff(c.row), s.col.abs_diff(c.col));
+                                ((dr * dr + dc * dc) as f32).sqrt()
+                            })
+                            .fold(f32::INFINITY, f32::min);
+                        // Unit speed here is at most 1.5: the straight line at that speed.
+                        assert!(v >= straight / 1.5 - 1e-4, "{c}: {v} < {straight}");
+                    }
+                    for &s in &sources {
+                        assert_eq!(field.get(s), Some(0.0));
+                    }
+                }
+            }
+            let mut grid3 = Grid3::new(4, 5, 3).unwrap();
+            grid3.set_obstacle(Cell3::new(1, 1, 1), true).unwrap();
+            let field = FastMarching::with_order(Order::Second)
+                .solve3(&grid3, &[Cell3::new(0, 0, 0)])
+                .unwrap();
+            assert!(field.values().iter().filter(|v| v.is_finite()).count() == 59);
+        }
+    }
+}

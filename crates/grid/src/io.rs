@@ -22,10 +22,12 @@ pub fn write_atomic(path: impl AsRef<Path>, bytes: &[u8]) -> Result<()> {
     let path = path.as_ref();
     check_writable(path)?;
     let result = (|| {
-        let mut tmp = tempfile::Builder::new()
-            .prefix(".envfield-")
-            .suffix(".tmp")
-            .tempfile_in(folder_of(path))?;
+        let mut builder = tempfile::Builder::new();
+        builder.prefix(".envfield-").suffix(".tmp");
+        // The mode a plain `File::create` gives (0666 less the umask), not tempfile's 0600.
+        #[cfg(unix)]
+        builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
+        let mut tmp = builder.tempfile_in(folder_of(path))?;
         tmp.write_all(bytes)?;
         tmp.as_file().sync_all()?;
         tmp.persist(path).map_err(|e| e.error)?;
@@ -87,6 +89,16 @@ mod tests {
         write_atomic(&p, b"two").unwrap();
         assert_eq!(std::fs::read(&p).unwrap(), b"two");
         assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1);
+        #[cfg(unix)]
+        {
+            // Readable by others as a plain File::create would leave it (umask aside).
+            use std::os::unix::fs::PermissionsExt;
+            let plain = dir.join("plain.txt");
+            std::fs::write(&plain, b"").unwrap();
+            let mode = |p: &Path| std::fs::metadata(p).unwrap().permissions().mode() & 0o777;
+            assert_eq!(mode(&p), mode(&plain));
+            std::fs::remove_file(&plain).unwrap();
+        }
         assert!(write_atomic(dir.join("missing/x.txt"), b"").is_err());
         std::fs::remove_dir_all(&dir).unwrap();
     }

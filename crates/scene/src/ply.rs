@@ -104,6 +104,9 @@ impl Body<'_> {
     }
 }
 
+/// The longest list (polygon) a face may hold.
+const MAX_LIST: usize = 1 << 16;
+
 pub(crate) fn parse(bytes: &[u8], path: &Path) -> Result<TriangleMesh> {
     let err = |line: usize, reason: String| SceneError::Parse {
         path: path.to_path_buf(),
@@ -203,6 +206,11 @@ pub(crate) fn parse(bytes: &[u8], path: &Path) -> Result<TriangleMesh> {
                     .position(|p| matches!(p, Property::List(..)))
             })
             .flatten();
+        // An element without properties takes no bytes: its count, however large, reads
+        // nothing (and must not be looped over).
+        if element.properties.is_empty() {
+            continue;
+        }
         for item in 0..element.count {
             let mut point = [0.0f32; 3];
             for (k, property) in element.properties.iter().enumerate() {
@@ -215,11 +223,20 @@ pub(crate) fn parse(bytes: &[u8], path: &Path) -> Result<TriangleMesh> {
                         }
                     }
                     Property::List(c, t) => {
-                        let n = body.next(*c).map_err(where_)? as usize;
-                        let mut idx = Vec::with_capacity(n);
+                        // A list's length is read from the file: check it before trusting
+                        // it with memory (a float length or a huge one is an error).
+                        let len = body.next(*c).map_err(where_)?;
+                        if !(len >= 0.0 && len.fract() == 0.0 && len <= MAX_LIST as f64) {
+                            return Err(err(
+                                0,
+                                format!("{} {item}: bad list length {len}", element.name),
+                            ));
+                        }
+                        let n = len as usize;
+                        let mut idx = Vec::with_capacity(n.min(16));
                         for _ in 0..n {
                             let v = body.next(*t).map_err(where_)?;
-                            if v < 0.0 || v.fract() != 0.0 {
+                            if !(v >= 0.0 && v.fract() == 0.0 && v <= u32::MAX as f64) {
                                 return Err(err(0, format!("face {item}: bad vertex index {v}")));
                             }
                             idx.push(v as u32);

@@ -1,0 +1,70 @@
+#!/usr/bin/env bash
+# The hostile-input cases of docs/hostile-input.md. Usage:
+#   scripts/hostile_cases.sh BIN_DIR SCRATCH_DIR > cases.tsv
+# BIN_DIR holds built example binaries (target/release/examples); SCRATCH_DIR is written to.
+# Prints one line per case: id, exit status, the last line printed (tab-separated). Each case
+# runs under a time limit and a 6 GB address-space limit, so an unbounded allocation aborts.
+BIN=$(cd "$1" && pwd); T=$2; mkdir -p "$T"; T=$(cd "$T" && pwd)
+cd "$(dirname "$0")/.."
+export MIMALLOC_PURGE_DELAY=-1 RUST_BACKTRACE=0
+printf '#####\n#S..#\n#.#G#\n#####\n' > $T/grid.txt
+cat $T/grid.txt > $T/two.txt; echo >> $T/two.txt; cat $T/grid.txt >> $T/two.txt
+head -c 100 /dev/urandom > $T/bad.png; printf '#\n' > $T/wall.txt
+python3 -c "
+import struct
+hdr=b\"{'descr': '<f4', 'fortran_order': False, 'shape': (4, 4), }\"
+hdr=hdr+b' '*(118-len(hdr))+b'\\n'
+open('$T/float.npy','wb').write(b'\\x93NUMPY\\x01\\x00'+struct.pack('<H',len(hdr))+hdr+b'\\0'*64)"
+python3 -c "
+rows=['S'+'.'*27]+['.'*28 for _ in range(26)]+['.'*27+'G']
+open('$T/pic.txt','w').write('\\n'.join(rows)+'\\n')"
+head -c 5000 models/vin_8.safetensors > $T/broken.safetensors
+python3 -c "
+n=2000
+rows=['S'+'.'*(n-1)]+['.'*n for _ in range(n-2)]+['.'*(n-1)+'G']
+open('$T/big.txt','w').write('\n'.join(rows)+'\n')"
+run() { id=$1; shift; lim=$1; shift; out=$( (ulimit -v 6000000; timeout $lim "$@") 2>&1 ); rc=$?; last=$(printf '%s' "$out" | grep -v '^\s*$' | grep -v "at \./\|^ *[0-9]*: \|^stack backtrace\|note: run with" | tail -1 | cut -c1-150); printf '%s\t%s\t%s\n' "$id" "$rc" "$last"; }
+run 1 60 $BIN/train_maze --size 8 --mazes 0 --steps 2 --out $T/m.safetensors
+run 2a 20 $BIN/fmm $T/grid.txt --repeat 18446744073709551615
+run 2b 20 $BIN/fmm $T/grid.txt --repeat 100000000000
+run 3a 20 $BIN/room --points 18446744073709551615 --out $T/r
+run 3b 20 $BIN/room --points 10000000000 --out $T/r
+run 4a 60 $BIN/room --body-radius 1e30 --out $T/r
+run 4b 20 $BIN/room --body-radius 100 --out $T/r
+run 5 120 $BIN/maze_nav --mazes $T/big.txt --planner field --rule strict
+run 6a 20 $BIN/maze_nav --count 100000000000 --size 8 --planner astar
+run 6b 20 $BIN/maze_nav --pairs 100000000000 --size 8 --planner astar
+run 6c 60 $BIN/train_maze --size 8 --mazes 4 --steps 1 --batch 100000000 --queries 1000000 --out $T/m.safetensors
+run 6d 60 $BIN/train_maze --size 8 --mazes 4 --steps 1 --encoder "100000000x[16:1]" --out $T/m.safetensors
+run 7 60 $BIN/maze_nav --size 8 --count 20 --planner vin --model $T/broken.safetensors
+cp models/hyper.safetensors $T/good.safetensors
+run 8a 60 $BIN/train_vin --size 8 --mazes 10 --steps 0 --eval-mazes 5 --out $T/good.safetensors
+printf '8a-kept\t%s\t%s\n' "$(cmp -s models/hyper.safetensors $T/good.safetensors; echo $?)" "$(cmp -s models/hyper.safetensors $T/good.safetensors && echo file kept || echo file replaced)"
+cp models/hyper.safetensors $T/good.safetensors
+run 8b 60 $BIN/train_maze --size 8 --mazes 4 --steps 0 --out $T/good.safetensors
+printf '8b-kept\t%s\t%s\n' "$(cmp -s models/hyper.safetensors $T/good.safetensors; echo $?)" "$(cmp -s models/hyper.safetensors $T/good.safetensors && echo file kept || echo file replaced)"
+run 9 60 $BIN/train_maze --size 8 --mazes 4 --steps 2 --eval-mazes 0 --out $T/m9.safetensors
+run 10a 20 $BIN/maze_nav --count 0 --size 8 --planner astar
+run 10b 20 $BIN/maze_nav --mazes $T/wall.txt --planner astar
+rm -f $T/f.npy
+run 11 20 $BIN/fmm $T/pic.txt --spacing 1e38 --out $T/f.npy
+printf '11-nan\t-\t%s\n' "$(python3 -c "
+import struct,math,sys
+try: b=open('$T/f.npy','rb').read()
+except OSError: print('no field written'); sys.exit()
+n=struct.unpack('<H',b[8:10])[0]; v=struct.unpack('<%df'%((len(b)-10-n)//4), b[10+n:])
+print(sum(1 for x in v if math.isnan(x)),'NaN cells in the field written')")"
+$BIN/train_vin --size 8 --mazes 10 --steps 3 --eval-mazes 5 --out $T/v8.safetensors > /dev/null 2>&1
+run 12a 60 $BIN/train_vin --size 16 --mazes 10 --steps 6 --eval-mazes 5 --resume $T/v8.safetensors.ckpt --out $T/v16.safetensors
+run 12b 20 $BIN/fmm $T/two.txt
+echo keep > $T/victim.txt
+run 13 20 sh -c "ln -sf $T/victim.txt $T/.f13.npy.\$\$.tmp; exec $BIN/fmm $T/grid.txt --out $T/f13.npy"
+printf '13-victim\t-\t%s\n' "$(head -c 20 $T/victim.txt | tr -d '\n' | cut -c1-20)"
+rm -f $T/.f13.npy.*.tmp
+start=$(date +%s.%N); run 14a 120 $BIN/maze_nav --size 64 --count 5000 --planner astar,fmm --paths /nonexistent/p.json; printf '14a-time\t-\t%.1f s\n' "$(echo "$(date +%s.%N) - $start" | bc)"
+mkdir -p $T/somedir
+run 14b 120 $BIN/train_maze --size 8 --mazes 4 --steps 20 --out $T/somedir/
+run 15a 20 $BIN/fmm $T/bad.png
+run 15b 20 $BIN/fmm $T/float.npy
+run 15c 60 $BIN/train_maze --size 8 --mazes 4 --steps 2 --lr=-1 --out $T/m15.safetensors
+run 16 120 $BIN/maze_nav --generator perfect --size 41 --count 20 --png $T/out.png --paths $T/paths.json
