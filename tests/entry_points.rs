@@ -1,0 +1,191 @@
+//! The examples meet hostile input (the cases of `docs/hostile-input.md`): each must exit
+//! with a clear error, never a panic, an abort or a hang, and must leave a user's file as it
+//! was. The example binaries are the ones `cargo test` builds beside this test; where they
+//! are missing (a run of this test alone) it skips with a message, except under CI.
+//! `ENVFIELD_EXAMPLES_DIR` points it at other builds (the binaries from before the fixes fail
+//! every test here).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// The built example `name`, beside this test's binary (`target/<profile>/examples/`).
+fn example(name: &str) -> Option<PathBuf> {
+    let dir = match std::env::var_os("ENVFIELD_EXAMPLES_DIR") {
+        Some(dir) => PathBuf::from(dir),
+        None => std::env::current_exe()
+            .ok()?
+            .parent()?
+            .parent()?
+            .join("examples"),
+    };
+    let path = dir.join(name);
+    if path.is_file() {
+        return Some(path);
+    }
+    let reason = format!("{} not built (run the whole `cargo test`)", path.display());
+    assert!(
+        std::env::var("CI").as_deref() != Ok("true"),
+        "CI=true: {reason}"
+    );
+    eprintln!("skipping: {reason}");
+    None
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("envfield-entry-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Runs `args` and asserts a clean refusal: exit status 1 (anyhow's error), no panic (101) or
+/// abort, and `expect` in the message.
+fn refuses(out: Output, expect: &str) {
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "not a clean error:\n{stderr}");
+    assert!(stderr.contains(expect), "expected `{expect}` in:\n{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}
+
+fn run(bin: &Path, args: &[&str]) -> Output {
+    Command::new(bin)
+        .args(args)
+        .env("RUST_BACKTRACE", "0")
+        .output()
+        .unwrap()
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> String {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p.to_string_lossy().into_owned()
+}
+
+#[test]
+fn fmm_refuses_absurd_repeats_several_mazes_and_overflowing_spacings() {
+    let Some(fmm) = example("fmm") else { return };
+    let dir = scratch("fmm");
+    let grid = write(&dir, "grid.txt", "#####\n#S..#\n#.#G#\n#####\n");
+    let two = write(&dir, "two.txt", "S.G\n\n..G\nS..\n");
+    refuses(
+        run(&fmm, &[&grid, "--repeat", "18446744073709551615"]),
+        "--repeat",
+    );
+    refuses(run(&fmm, &[&grid, "--repeat", "100000000000"]), "--repeat");
+    refuses(run(&fmm, &[&two]), "holds 2 mazes");
+    let out = dir.join("f.npy");
+    refuses(
+        run(
+            &fmm,
+            &[&grid, "--spacing", "1e38", "--out", &out.to_string_lossy()],
+        ),
+        "overflow",
+    );
+    assert!(!out.exists(), "no field written");
+    let png = write(&dir, "bad.png", "not a png at all");
+    refuses(run(&fmm, &[&png]), "bad.png");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn maze_nav_refuses_zero_and_absurd_counts_and_checks_outputs_first() {
+    let Some(nav) = example("maze_nav") else {
+        return;
+    };
+    let dir = scratch("nav");
+    let astar = ["--size", "8", "--planner", "astar"];
+    refuses(
+        run(&nav, &[&astar[..], &["--count", "0"]].concat()),
+        "at least 1",
+    );
+    refuses(
+        run(&nav, &[&astar[..], &["--pairs", "100000000000"]].concat()),
+        "more than",
+    );
+    refuses(
+        run(&nav, &[&astar[..], &["--count", "100000000000"]].concat()),
+        "more than",
+    );
+    let wall = write(&dir, "wall.txt", "#\n");
+    refuses(
+        run(&nav, &["--mazes", &wall, "--planner", "astar"]),
+        "no (start, goal) pair",
+    );
+    refuses(
+        run(
+            &nav,
+            &[&astar[..], &["--paths", "/nonexistent/p.json"]].concat(),
+        ),
+        "does not exist",
+    );
+    // A truncated VIN file is an error, not a silent fall back to the shipped VIN.
+    let models = Path::new(env!("CARGO_MANIFEST_DIR")).join("models");
+    let bytes = std::fs::read(models.join("vin_8.safetensors")).unwrap();
+    let broken = dir.join("broken.safetensors");
+    std::fs::write(&broken, &bytes[..bytes.len() / 2]).unwrap();
+    let args = ["--size", "8", "--count", "2", "--planner", "vin", "--model"];
+    refuses(
+        run(&nav, &[&args[..], &[&*broken.to_string_lossy()]].concat()),
+        "broken.safetensors",
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn training_refuses_no_data_and_no_steps_and_keeps_the_file() {
+    let dir = scratch("train");
+    let good = dir.join("good.safetensors");
+    let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("models/vin_8.safetensors");
+    std::fs::copy(&shipped, &good).unwrap();
+    let out = good.to_string_lossy().into_owned();
+    if let Some(train) = example("train_maze") {
+        let base = ["--size", "8", "--out"];
+        refuses(
+            run(&train, &[&base[..], &[&out, "--mazes", "0"]].concat()),
+            "at least 1",
+        );
+        refuses(
+            run(&train, &[&base[..], &[&out, "--steps", "0"]].concat()),
+            "trains nothing",
+        );
+        refuses(
+            run(&train, &[&base[..], &[&out, "--stop-at", "0"]].concat()),
+            "trains nothing",
+        );
+        let folder = format!("{}/", dir.display());
+        refuses(
+            run(&train, &[&base[..], &[&folder, "--mazes", "4"]].concat()),
+            "folder",
+        );
+        let args = [&base[..], &[&out, "--mazes", "4", "--lr=-1"]].concat();
+        refuses(run(&train, &args), "lr must be positive");
+    }
+    if let Some(vin) = example("train_vin") {
+        let args = ["--size", "8", "--mazes", "4", "--steps", "0", "--out", &out];
+        refuses(run(&vin, &args), "trains nothing");
+    }
+    assert_eq!(
+        std::fs::read(&good).unwrap(),
+        std::fs::read(&shipped).unwrap()
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn room_refuses_absurd_point_counts_and_radii_quickly() {
+    let Some(room) = example("room") else { return };
+    let dir = scratch("room");
+    let out = dir.to_string_lossy().into_owned();
+    refuses(
+        run(&room, &["--points", "18446744073709551615", "--out", &out]),
+        "surface points",
+    );
+    let t = std::time::Instant::now();
+    refuses(
+        run(&room, &["--body-radius", "1e30", "--out", &out]),
+        "body radius",
+    );
+    assert!(t.elapsed().as_secs() < 60, "{:?}", t.elapsed());
+    let bad = write(&dir, "bad.obj", "v 1 2\n");
+    refuses(run(&room, &["--scene", &bad, "--out", &out]), "line 1");
+    std::fs::remove_dir_all(&dir).ok();
+}
