@@ -46,7 +46,10 @@ fn bench_planners(c: &mut Criterion) {
             .filter(|k| size <= 28 || !matches!(k.model_family(), Some("context" | "hyper")))
             .filter_map(|k| {
                 k.build(&options, |family| {
-                    source.load(family, size).map_err(anyhow::Error::from)
+                    source
+                        .load(family, size)
+                        .map(|(_, model)| model)
+                        .map_err(anyhow::Error::from)
                 })
                 .ok()
             })

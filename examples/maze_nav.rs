@@ -293,11 +293,9 @@ fn main() -> Result<()> {
         let mut choices: Vec<NamedPlanner> = Vec::new();
         for kind in &planners {
             let built = kind.build(&options, |family| {
-                let file = source.resolve(family, size);
-                if let Ok(file) = &file {
-                    eprintln!("{} {kind}: {}", suite.label, file.display());
-                }
-                source.load(family, size).map_err(LoadError::from)
+                let (file, model) = source.load(family, size)?;
+                eprintln!("{} {kind}: {}", suite.label, file.display());
+                Ok::<_, LoadError>(model)
             });
             match built {
                 Ok(choice) => choices.push(choice),

@@ -41,34 +41,28 @@ impl ModelSource {
         }
     }
 
-    /// The weight file that [`ModelSource::load`] reads for `family` and mazes of side `size`.
-    /// For `vin` an explicit file is taken when it is a VIN file; when it is a field model's
-    /// file (one flag serving a run of both), VIN's own file in the folder is taken instead.
-    ///
-    /// # Errors
-    /// [`NetsError::ModelNotFound`]; for `vin`, the error reading an explicit file that is
-    /// neither a VIN nor a field model's file (missing, truncated, foreign).
-    pub fn resolve(&self, family: &str, size: usize) -> Result<PathBuf> {
-        match (family, self.explicit.as_deref()) {
-            ("vin", Some(p)) => match Vin::load(p) {
-                Ok(_) => Ok(p.to_path_buf()),
-                Err(_) if first_is_field_file(p) => model_file(&self.dir, "vin", size),
-                Err(e) => Err(e),
-            },
-            _ => self.file(family, size),
-        }
-    }
-
     /// The learned model of `family` (`context`, `hyper` or `vin`) for mazes of side `size`,
-    /// ready for [`envfield_plan::PlannerKind::build`]; the file is [`ModelSource::resolve`]'s.
+    /// ready for [`envfield_plan::PlannerKind::build`], with the file it came from. The field
+    /// families read [`ModelSource::file`]. For `vin` an explicit file is taken when it is a
+    /// VIN file; when it is a field model's file (one flag serving a run of both), VIN's own
+    /// file in the folder is taken instead; anything else explicit is an error, never a quiet
+    /// fall back.
     ///
     /// # Errors
     /// A missing or unreadable weight file (the error names it); an unknown family.
-    pub fn load(&self, family: &str, size: usize) -> Result<Learned> {
+    pub fn load(&self, family: &str, size: usize) -> Result<(PathBuf, Learned)> {
         match family {
-            "vin" => Ok(Learned::Policy(Box::new(Vin::load(
-                self.resolve("vin", size)?,
-            )?))),
+            "vin" => {
+                let (file, vin) = match self.explicit.as_deref() {
+                    Some(p) => match Vin::load(p) {
+                        Ok(vin) => (p.to_path_buf(), vin),
+                        Err(_) if first_is_field_file(p) => self.own_vin(size)?,
+                        Err(e) => return Err(e),
+                    },
+                    None => self.own_vin(size)?,
+                };
+                Ok((file, Learned::Policy(Box::new(vin))))
+            }
             "context" | "hyper" => {
                 let file = self.file(family, size)?;
                 let mut nets = file
@@ -80,15 +74,25 @@ impl ModelSource {
                     1 => Box::new(nets.remove(0)),
                     _ => Box::new(Ensemble::new(nets)?),
                 };
-                Ok(Learned::Field(match self.views {
+                let learned: BoxedField = match self.views {
                     1 => learned,
                     views => Box::new(Symmetric::new(learned, views)?),
-                }))
+                };
+                Ok((file, Learned::Field(learned)))
             }
             other => Err(NetsError::InvalidInput(format!(
                 "no learned model family `{other}` (context, hyper or vin)"
             ))),
         }
+    }
+}
+
+impl ModelSource {
+    /// VIN's own file for the size in the folder, loaded.
+    fn own_vin(&self, size: usize) -> Result<(PathBuf, Vin)> {
+        let file = model_file(&self.dir, "vin", size)?;
+        let vin = Vin::load(&file)?;
+        Ok((file, vin))
     }
 }
 
@@ -120,17 +124,16 @@ mod tests {
             explicit: Some(explicit.to_path_buf()),
             ..shipped()
         };
+        let vin_file = |s: ModelSource| s.load("vin", 16).map(|(file, _)| file);
         // A field model's file: VIN's own file for the size.
         assert_eq!(
-            with(&context).resolve("vin", 16).unwrap(),
+            vin_file(with(&context)).unwrap(),
             source.dir.join("vin_16.safetensors")
         );
         // A VIN file: that file.
-        assert_eq!(with(&vin8).resolve("vin", 16).unwrap(), vin8);
+        assert_eq!(vin_file(with(&vin8)).unwrap(), vin8);
         // A missing or truncated file: an error, never the default.
-        assert!(with(Path::new("no/such.safetensors"))
-            .resolve("vin", 16)
-            .is_err());
+        assert!(vin_file(with(Path::new("no/such.safetensors"))).is_err());
         let dir = std::env::temp_dir().join(format!("envfield-models-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let broken = dir.join("broken.safetensors");

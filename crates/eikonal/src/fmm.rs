@@ -123,8 +123,9 @@ impl FastMarching {
         }
     }
 
-    /// Distances past f32's range (a huge spacing, or tiny speeds) would come out as NaN or as
-    /// an infinity that reads "unreachable": refuse them rather than return them.
+    /// With a speed map, distances past f32's range (tiny speeds) would come out as NaN:
+    /// refuse them rather than return them. (With unit speed [`FastMarching::check_range`]
+    /// rules the overflow out before the march, so the common case pays no scan.)
     fn check_finite(&self, values: &[f32]) -> Result<()> {
         if values.iter().any(|v| v.is_nan()) {
             return Err(EikonalError::InvalidConfig(format!(
@@ -227,7 +228,9 @@ impl FastMarching {
             second_order: self.order == Order::Second,
             source_radius: self.source_radius,
         });
-        self.check_finite(&values)?;
+        if options.speed.is_some() {
+            self.check_finite(&values)?;
+        }
         Ok(Field2::new(grid.rows(), grid.cols(), values)?)
     }
 
@@ -290,7 +293,9 @@ impl FastMarching {
             second_order: self.order == Order::Second,
             source_radius: self.source_radius,
         });
-        self.check_finite(&values)?;
+        if options.speed.is_some() {
+            self.check_finite(&values)?;
+        }
         Ok(Field3::new(grid.shape(), values)?)
     }
 

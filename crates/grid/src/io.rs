@@ -20,7 +20,7 @@ fn folder_of(path: &Path) -> PathBuf {
 /// [`GridError::Io`] naming the path; [`GridError::Invalid`] for a path that names a folder.
 pub fn write_atomic(path: impl AsRef<Path>, bytes: &[u8]) -> Result<()> {
     let path = path.as_ref();
-    check_writable(path)?;
+    check_file_path(path)?;
     let result = (|| {
         let mut builder = tempfile::Builder::new();
         builder.prefix(".envfield-").suffix(".tmp");
@@ -36,19 +36,10 @@ pub fn write_atomic(path: impl AsRef<Path>, bytes: &[u8]) -> Result<()> {
     result.map_err(|e: std::io::Error| GridError::io(path, e))
 }
 
-/// Checks, before any work, that a file could be written at `path`: it names a file (not a
-/// folder), its folder exists, and a file can be created there. Call it on output paths
-/// before a long computation, so a typo fails at once rather than after the work.
-///
-/// # Errors
-/// [`GridError::Invalid`] for a folder or a path without a file name; [`GridError::Io`]
-/// naming the path when its folder is missing or cannot be written.
-pub fn check_writable(path: impl AsRef<Path>) -> Result<()> {
-    let path = path.as_ref();
-    if path.file_name().is_none()
-        || path.is_dir()
-        || path.as_os_str().to_string_lossy().ends_with('/')
-    {
+/// That `path` names a file (not a folder) in a folder that exists.
+fn check_file_path(path: &Path) -> Result<()> {
+    let text = path.as_os_str().to_string_lossy();
+    if path.file_name().is_none() || path.is_dir() || text.ends_with('/') {
         return Err(GridError::Invalid(format!(
             "{} is a folder, not a file path",
             path.display()
@@ -64,9 +55,22 @@ pub fn check_writable(path: impl AsRef<Path>) -> Result<()> {
             ),
         ));
     }
+    Ok(())
+}
+
+/// Checks, before any work, that a file could be written at `path`: it names a file (not a
+/// folder), its folder exists, and a file can be created there. Call it on output paths
+/// before a long computation, so a typo fails at once rather than after the work.
+///
+/// # Errors
+/// [`GridError::Invalid`] for a folder or a path without a file name; [`GridError::Io`]
+/// naming the path when its folder is missing or cannot be written.
+pub fn check_writable(path: impl AsRef<Path>) -> Result<()> {
+    let path = path.as_ref();
+    check_file_path(path)?;
     tempfile::Builder::new()
         .prefix(".envfield-")
-        .tempfile_in(&dir)
+        .tempfile_in(folder_of(path))
         .map(drop)
         .map_err(|e| GridError::io(path, e))
 }
