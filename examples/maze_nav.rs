@@ -275,6 +275,7 @@ fn main() -> Result<()> {
     let source = ModelSource {
         explicit: args.model.clone(),
         views: args.views,
+        rule,
         ..ModelSource::new(models_dir())
     };
     let cfg = EvalConfig {

@@ -13,7 +13,7 @@ use anyhow::{bail, Context, Result};
 use clap::Parser;
 use envfield::mazes::{Dataset, DatasetConfig, GeneratorKind, MazeGenerator, TargetKind};
 use envfield::nets::{
-    parse_convs, Arch, DataCheck, FieldNet, ModelConfig, PropagationConfig, TargetEncoding,
+    parse_convs, Arch, DataCheck, FieldNet, ModelConfig, PathConfig, PropagationConfig, TargetEncoding,
     TrainConfig, Trainer,
 };
 use envfield::plan::{evaluate, EvalConfig, FieldDescent};
@@ -98,6 +98,14 @@ struct Args {
     /// than the iterations reach get no value from the goal.
     #[arg(long, default_value_t = 1.3)]
     propagation_iterations: f32,
+    /// The shortest-path readout in place of the context network's MLP: the encoder gives
+    /// eight move costs per cell and the field is the min-plus fixed point over them
+    /// (`envfield_nets::PathConfig`), under the --target's rule. No goal channel.
+    #[arg(long)]
+    path: bool,
+    /// With --path: the least cost of a move, in cells.
+    #[arg(long, default_value_t = 0.05)]
+    min_cost: f32,
     /// MLP hidden width and layers of the context network, as WIDTH:LAYERS.
     #[arg(long, default_value = "64:3")]
     mlp: String,
@@ -285,6 +293,13 @@ fn main() -> Result<()> {
                 c.residual = args.residual;
                 if let Some(spec) = &args.encoder {
                     c.encoder = parse_convs(spec)?;
+                }
+                if args.path {
+                    c.path = Some(PathConfig {
+                        min_cost: args.min_cost,
+                        rule,
+                    });
+                    c.goal_channel = false;
                 }
                 if args.propagation > 0 {
                     c.propagation = Some(PropagationConfig {

@@ -1,7 +1,7 @@
 //! Loading the learned models that planners by name need ([`envfield_plan::PlannerKind`]):
 //! the rule the examples and benchmarks share for picking weight files.
 
-use envfield_grid::{Ensemble, Symmetric};
+use envfield_grid::{Ensemble, MoveRule, Symmetric};
 use envfield_nets::{model_file, FieldNet, NetsError, Result, Vin};
 use envfield_plan::{BoxedField, Learned};
 use std::path::{Path, PathBuf};
@@ -17,6 +17,9 @@ pub struct ModelSource {
     pub explicit: Option<PathBuf>,
     /// Average a learned field over this many symmetric views of the maze (1 to 8).
     pub views: usize,
+    /// The move rule the agent walks by: a field with a shortest-path readout
+    /// ([`envfield_nets::PathConfig`]) takes its moves from it.
+    pub rule: MoveRule,
 }
 
 impl ModelSource {
@@ -26,6 +29,7 @@ impl ModelSource {
             dir: dir.into(),
             explicit: None,
             views: 1,
+            rule: MoveRule::Strict,
         }
     }
 
@@ -68,7 +72,11 @@ impl ModelSource {
                 let mut nets = file
                     .to_string_lossy()
                     .split(',')
-                    .map(|f| FieldNet::load(Path::new(f)))
+                    .map(|f| {
+                        let mut net = FieldNet::load(Path::new(f))?;
+                        net.set_rule(self.rule);
+                        Ok(net)
+                    })
                     .collect::<Result<Vec<_>>>()?;
                 let learned: BoxedField = match nets.len() {
                     1 => Box::new(nets.remove(0)),

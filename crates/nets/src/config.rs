@@ -2,6 +2,7 @@
 
 use crate::layers::{validate_convs, ConvSpec, MlpConfig, MAX_CONVS};
 use crate::{NetsError, Result, TargetEncoding};
+use envfield_grid::MoveRule;
 use serde::{Deserialize, Serialize};
 
 /// A plain field (paper Fig. 4a): query coordinates -> reaching distance, for one scene and goal.
@@ -58,6 +59,39 @@ pub struct ContextConfig {
     /// paper's plain encoder.
     #[serde(default)]
     pub propagation: Option<PropagationConfig>,
+    /// The shortest-path readout (see [`PathConfig`]) in place of the MLP: `None` is the
+    /// paper's readout.
+    #[serde(default)]
+    pub path: Option<PathConfig>,
+}
+
+/// The shortest-path readout of a context network: a 1x1 convolution turns the encoder's
+/// features into eight move costs per cell, `min_cost + exp(s)`, and the field is the fixed
+/// point of the min-plus Bellman recurrence over them, `v(x) = min_a c_a(x) + v(x + a)`,
+/// `v(goal) = 0`, over the moves legal under the rule between free cells of the input map.
+///
+/// It is VIN's value iteration with `min` for `max`, the transition kernel fixed to the eight
+/// moves, iterated until nothing changes; the fixed point is computed exactly by Dijkstra's
+/// algorithm, so a path of any length is reached whatever the maze's size, and the gradient
+/// reaches the costs along each cell's shortest-path branch. Descent on such a field never
+/// meets a local minimum, whatever the costs: every reached cell has a move to a smaller
+/// value. What is learned is the costs, and through them how long each path is.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct PathConfig {
+    /// The least cost of a move (in cells): keeps every cost positive.
+    pub min_cost: f32,
+    /// The move rule of the recurrence's moves; [`crate::FieldNet::set_rule`] changes it for
+    /// a loaded network (the costs do not depend on it).
+    pub rule: MoveRule,
+}
+
+impl Default for PathConfig {
+    fn default() -> Self {
+        Self {
+            min_cost: 0.05,
+            rule: MoveRule::Strict,
+        }
+    }
 }
 
 /// Value iteration inside the context encoder, VIN's recurrence (Tamar et al. 2016) as a
@@ -117,6 +151,7 @@ impl Default for ContextConfig {
             },
             encoding: TargetEncoding::Reciprocal,
             propagation: None,
+            path: None,
         }
     }
 }
@@ -274,6 +309,25 @@ impl ModelConfig {
                             "context propagation: q_channels >= 1 and iterations_per_cell > 0 (got {p:?})"
                         )));
                     }
+                }
+                if let Some(p) = c.path {
+                    if !(p.min_cost.is_finite() && p.min_cost > 0.0) {
+                        return Err(NetsError::InvalidConfig(format!(
+                            "context path: min_cost must be positive (got {})",
+                            p.min_cost
+                        )));
+                    }
+                    if c.propagation.is_some() {
+                        return Err(NetsError::InvalidConfig(
+                            "context: path and propagation are two readouts; give one".into(),
+                        ));
+                    }
+                    if c.encoder.is_empty() {
+                        return Err(NetsError::InvalidConfig(
+                            "context path: the move costs need at least one convolution".into(),
+                        ));
+                    }
+                    return Ok(());
                 }
                 c.mlp.validate("context mlp")
             }

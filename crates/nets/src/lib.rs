@@ -49,8 +49,8 @@ mod vin;
 
 pub use batch::Batch;
 pub use config::{
-    parse_convs, Arch, ContextConfig, GoalConfig, HyperConfig, ModelConfig, PlainConfig,
-    PropagationConfig,
+    parse_convs, Arch, ContextConfig, GoalConfig, HyperConfig, ModelConfig, PathConfig,
+    PlainConfig, PropagationConfig,
 };
 pub use encoding::{TargetEncoding, BLOCKED};
 pub use envfield_grid::FieldModel;

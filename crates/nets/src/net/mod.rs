@@ -5,17 +5,19 @@ mod bound;
 mod context;
 mod hyper;
 mod io;
+mod path;
 
 pub use bound::BoundField;
 pub(crate) use io::read_config;
 
 use crate::layers::{encode_coords, sample_features, ConvStack, IndexCache, Mlp};
 use crate::params::ParamStore;
-use crate::{Batch, ContextConfig, HyperConfig, ModelConfig, NetsError, Result};
+use crate::{Batch, ContextConfig, HyperConfig, ModelConfig, NetsError, Result, TargetEncoding};
 use candle_core::{Device, Tensor, Var};
 use context::Propagation;
-use envfield_grid::{Cell2, Field2, FieldModel, Grid2, GridError};
+use envfield_grid::{Cell2, Field2, FieldModel, Grid2, GridError, MoveRule};
 use hyper::Hyper;
+use path::{MinPlus, PathLayer, MOVES};
 
 #[derive(Debug)]
 enum Net {
@@ -24,7 +26,9 @@ enum Net {
     Context {
         encoder: ConvStack,
         propagation: Option<Propagation>,
-        mlp: Mlp,
+        /// The paper's readout; `None` with a shortest-path readout.
+        mlp: Option<Mlp>,
+        path: Option<PathLayer>,
     },
     Hyper(Hyper),
 }
@@ -42,6 +46,8 @@ pub struct FieldNet {
     net: Net,
     cache: IndexCache,
     device: Device,
+    /// The move rule of a shortest-path readout's recurrence.
+    rule: MoveRule,
 }
 
 impl FieldNet {
@@ -87,15 +93,25 @@ impl FieldNet {
                     }
                     None => None,
                 };
-                let input = feat + 2 * c.mlp.encoded_width(2);
-                let mlp = Mlp::new(&mut store, "mlp", &c.mlp, input, 1)?;
+                let (mlp, path) = match c.path {
+                    Some(p) => (None, Some(PathLayer::new(&mut store, feat, p)?)),
+                    None => {
+                        let input = feat + 2 * c.mlp.encoded_width(2);
+                        (Some(Mlp::new(&mut store, "mlp", &c.mlp, input, 1)?), None)
+                    }
+                };
                 Net::Context {
                     encoder,
                     propagation,
                     mlp,
+                    path,
                 }
             }
             ModelConfig::Hyper(c) => Net::Hyper(Hyper::new(&mut store, c)?),
+        };
+        let rule = match &config {
+            ModelConfig::Context(ContextConfig { path: Some(p), .. }) => p.rule,
+            _ => MoveRule::Strict,
         };
         Ok(Self {
             config,
@@ -103,7 +119,119 @@ impl FieldNet {
             net,
             cache: IndexCache::default(),
             device: device.clone(),
+            rule,
         })
+    }
+
+    /// The move rule of a shortest-path readout ([`crate::PathConfig`]); the config's rule
+    /// until [`FieldNet::set_rule`] changes it. Other networks ignore it.
+    pub fn rule(&self) -> MoveRule {
+        self.rule
+    }
+
+    /// Sets the move rule of a shortest-path readout's recurrence, so the field's moves are
+    /// the ones the agent walks by (the learned costs do not depend on the rule). Other
+    /// networks ignore it.
+    pub fn set_rule(&mut self, rule: MoveRule) {
+        self.rule = rule;
+    }
+
+    /// Whether the network has a shortest-path readout.
+    pub fn has_path_readout(&self) -> bool {
+        matches!(&self.net, Net::Context { path: Some(_), .. })
+    }
+
+    /// The min-plus problem of `batch`: its free cells, goals and this network's rule.
+    fn min_plus(&self, batch: &Batch) -> MinPlus {
+        let (rows, cols) = (batch.extent[0], batch.extent[1]);
+        MinPlus {
+            rows,
+            cols,
+            free: batch.obstacles.iter().map(|&o| o < 0.5).collect(),
+            goals: (0..batch.items)
+                .map(|b| {
+                    let (r, c) = (batch.goals[2 * b].round(), batch.goals[2 * b + 1].round());
+                    r as usize * cols + c as usize
+                })
+                .collect(),
+            rule: self.rule,
+        }
+    }
+
+    /// The shortest-path readout: move costs from `features`, the fixed point over them, its
+    /// bilinear sample at the queries, encoded, and [`crate::BLOCKED`] where the query's
+    /// cell is not reached from the goal.
+    fn path_readout(
+        &self,
+        layer: &PathLayer,
+        features: &Tensor,
+        batch: &Batch,
+        queries: &Tensor,
+        encoding: TargetEncoding,
+        track: bool,
+    ) -> Result<Tensor> {
+        let costs = layer.costs(features)?;
+        let costs = if track { costs } else { costs.detach() };
+        let problem = self.min_plus(batch);
+        let (rows, cols) = (problem.rows, problem.cols);
+        let reached: Vec<Vec<bool>> = (0..batch.items).map(|b| problem.reached(b)).collect();
+        let values = costs.contiguous()?.apply_op1(problem)?;
+        let points: Vec<[f32; 2]> = batch
+            .queries
+            .chunks_exact(2)
+            .map(|p| [p[0], p[1]])
+            .collect();
+        let rows_t = queries.narrow(1, 0, 1)?;
+        let cols_t = queries.narrow(1, 1, 1)?;
+        let v = sample_features(&values, &points, batch.per_item, &rows_t, &cols_t)?;
+        let mask: Vec<f32> = points
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                let (r, c) = (p[0].round() as usize, p[1].round() as usize);
+                let inside = r < rows && c < cols;
+                (inside && reached[i / batch.per_item][r * cols + c]) as u8 as f32
+            })
+            .collect();
+        let n = mask.len();
+        let mask = Tensor::from_vec(mask, (n, 1), &self.device)?;
+        let encoded = match encoding {
+            TargetEncoding::Reciprocal => (v + 1.0)?.recip()?,
+            TargetEncoding::Linear { scale } => v.affine(-1.0 / scale as f64, 1.0)?.relu()?,
+        };
+        Ok(((encoded * &mask)? + (mask - 1.0)?)?)
+    }
+
+    /// The field of a network with a shortest-path readout: the encoder and the costs without
+    /// gradients, then one Dijkstra pass; cells the goal does not reach are infinite.
+    fn path_field(&self, grid: &Grid2, goal: Cell2) -> Result<Field2> {
+        let (Net::Context {
+            encoder,
+            path: Some(layer),
+            ..
+        }, ModelConfig::Context(c)) = (&self.net, &self.config)
+        else {
+            unreachable!("only called for shortest-path readouts")
+        };
+        let batch = Batch::points(grid, goal, &[]);
+        let input = self.grid_input(&batch, c.goal_channel)?;
+        let features = encoder.forward_inference(&input)?;
+        let costs = layer.costs(&features)?.flatten_all()?.to_vec1::<f32>()?;
+        debug_assert_eq!(costs.len(), grid.len() * MOVES);
+        let problem = self.min_plus(&batch);
+        let solved = problem.solve(0, &costs);
+        let goal_index = goal.row * grid.cols() + goal.col;
+        let values = solved
+            .values
+            .iter()
+            .zip(&solved.first_move)
+            .enumerate()
+            .map(|(i, (&v, &m))| match m != u8::MAX || i == goal_index {
+                true => v,
+                false => f32::INFINITY,
+            })
+            .collect();
+        Ok(Field2::new(grid.rows(), grid.cols(), values)?)
     }
 
     /// The network's config.
@@ -209,6 +337,7 @@ impl FieldNet {
                     encoder,
                     propagation,
                     mlp,
+                    path,
                 },
                 ModelConfig::Context(c),
             ) => {
@@ -218,6 +347,12 @@ impl FieldNet {
                 } else {
                     encoder.forward_inference(&input)?
                 };
+                if let Some(layer) = path {
+                    let out =
+                        self.path_readout(layer, &features, batch, queries, c.encoding, track)?;
+                    return Ok(out.reshape(n)?);
+                }
+                let mlp = mlp.as_ref().expect("an MLP readout without a path readout");
                 if let Some(p) = propagation {
                     // The propagated values do not depend on the queries: without training
                     // they need no gradient.
@@ -335,6 +470,9 @@ impl FieldNet {
                 grid.rows(),
                 grid.cols()
             )));
+        }
+        if self.has_path_readout() {
+            return self.path_field(grid, goal);
         }
         let raw = self.predict_encoded(&Batch::free_cells(grid, goal))?;
         let encoding = self.config.encoding();
