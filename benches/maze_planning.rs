@@ -3,8 +3,10 @@
 //! whole field computed, then the walk), A*, and, when the shipped models are in `models/`,
 //! the learned field (the whole field predicted once, then descent; all inference included),
 //! the same field with relays (`RelayDescent`: a failing walk is planned again through a relay
-//! cell, one more prediction per split), the hypernetwork, and VIN (one network pass per step,
-//! VIN's own protocol). Pairs and rule are `vin` here, as in the maze benchmark.
+//! cell, one more prediction per split), the hypernetwork (up to 28x28), and VIN (one network
+//! pass per step, VIN's own protocol). VIN has no model for 64x64: there an untrained VIN with
+//! VIN's K for the size (84) is timed, named `vin-untrained-k84`, since its cost does not
+//! depend on its weights. Pairs and rule are `vin` here, as in the maze benchmark.
 //!
 //! `cargo bench --bench maze_planning`
 
@@ -13,9 +15,11 @@
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use envfield::grid::MoveRule;
+use envfield::grid::{Cell2, Grid2, Policy};
 use envfield::mazes::{evaluation_pairs, GeneratorKind, MazeGenerator};
 use envfield::models::ModelSource;
-use envfield::plan::{NamedPlanner, PlannerKind, PlannerOptions};
+use envfield::nets::{Vin, VinConfig};
+use envfield::plan::{NamedPlanner, PlannerKind, PlannerOptions, PolicyWalk};
 use std::hint::black_box;
 use std::path::Path;
 
@@ -43,7 +47,7 @@ fn bench_planners(c: &mut Criterion) {
     for size in [8usize, 16, 28, 64] {
         let planners: Vec<NamedPlanner> = kinds
             .iter()
-            .filter(|k| size <= 28 || !matches!(k.model_family(), Some("context" | "hyper")))
+            .filter(|k| size <= 28 || k.model_family() != Some("hyper"))
             .filter_map(|k| {
                 k.build(&options, |family| {
                     source
@@ -54,6 +58,11 @@ fn bench_planners(c: &mut Criterion) {
                 .ok()
             })
             .collect();
+        let mut planners = planners;
+        if size > 28 {
+            let vin = Vin::new(VinConfig::for_size(size), 0).expect("VIN");
+            planners.push(NamedPlanner::Policy(PolicyWalk(Box::new(Untrained(vin)))));
+        }
         let mazes = MazeGenerator::new(GeneratorKind::Gridworld, size)
             .expect("size")
             .generate_many(50, 1)
@@ -75,6 +84,28 @@ fn bench_planners(c: &mut Criterion) {
             });
         }
         group.finish();
+    }
+}
+
+/// A VIN with random weights, renamed so no table mistakes it for the trained baseline.
+struct Untrained(Vin);
+
+impl Policy for Untrained {
+    fn name(&self) -> &str {
+        "vin-untrained-k84"
+    }
+
+    fn rule(&self) -> MoveRule {
+        Policy::rule(&self.0)
+    }
+
+    fn action_scores(
+        &self,
+        grid: &Grid2,
+        goal: Cell2,
+        state: Cell2,
+    ) -> envfield::grid::Result<[f32; 8]> {
+        self.0.action_scores(grid, goal, state)
     }
 }
 

@@ -13,8 +13,8 @@ use anyhow::{bail, Context, Result};
 use clap::Parser;
 use envfield::mazes::{Dataset, DatasetConfig, GeneratorKind, MazeGenerator, TargetKind};
 use envfield::nets::{
-    parse_convs, Arch, DataCheck, FieldNet, ModelConfig, PathConfig, PropagationConfig, TargetEncoding,
-    TrainConfig, Trainer,
+    parse_convs, Arch, DataCheck, FieldNet, ModelConfig, PathConfig, PropagationConfig,
+    TargetEncoding, TrainConfig, Trainer,
 };
 use envfield::plan::{evaluate, EvalConfig, FieldDescent};
 use indicatif::{ProgressBar, ProgressStyle};

@@ -7,7 +7,8 @@
 One file per environment, 200 layouts each (seeds 0..199), each with the environment's own
 agent start (S) and goal (G). Walls and lava are obstacles; doors (open, closed or locked)
 and every other object are free cells, since an agent can pass them by opening or picking
-up. The layouts come from Minigrid's generators, which envfield never trains on: they are
+up (LavaCrossing is left out: with the same seed it lays lava where SimpleCrossing lays
+walls, the same layout). The layouts come from Minigrid's generators, which envfield never trains on: they are
 evaluation data only.
 """
 
@@ -25,7 +26,6 @@ ENVS = [
     "MiniGrid-SimpleCrossingS11N5-v0",
     "MiniGrid-FourRooms-v0",
     "MiniGrid-MultiRoom-N4-S5-v1",
-    "MiniGrid-LavaCrossingS11N5-v0",
     "MiniGrid-MultiRoom-N6-v0",
 ]
 LAYOUTS = 200

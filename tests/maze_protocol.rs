@@ -283,15 +283,13 @@ fn pairs_naming_missing_mazes_or_walls_are_errors() {
     assert!(evaluate_pairs(&astar, &mazes, &on_wall, MoveRule::Strict, &mut |_, _| {}).is_err());
 }
 
-/// Lower bounds for the shipped fields (`context.safetensors`, `context_28.safetensors` at
-/// 28x28) on every 5th VIN test maze, a few points under their full-set figures in the README
-/// (100.0%, 99.5%, 99.0%) to allow for the subset.
-const FLOOR_8: f64 = 98.0;
-const FLOOR_16: f64 = 97.0;
-const FLOOR_28: f64 = 97.0;
-/// The same with relays (`RelayDescent`, one level and one candidate), whose full-set figures
-/// are 100.0%, 99.9%, 99.7%.
-const RELAY_FLOOR: f64 = 99.0;
+/// Lower bounds for the shipped field (`context.safetensors`) on every 5th VIN test maze,
+/// under its full-set figures in the README (100.0% on all three) to allow for the subset.
+const FLOOR_8: f64 = 99.5;
+const FLOOR_16: f64 = 99.5;
+const FLOOR_28: f64 = 99.5;
+/// The same with relays (`RelayDescent`, one level and one candidate).
+const RELAY_FLOOR: f64 = 99.5;
 
 /// The shipped learned fields (the ones maze_nav picks by size) plan on VIN's test sets under the
 /// `vin` rule about as well as the README says (every 5th maze, so the debug-build test stays
@@ -309,7 +307,8 @@ fn shipped_field_model_solves_vin_test_sets() {
         let Some(path) = vin_file(n) else { return };
         // The model maze_nav picks: context_<n> when it is there, else the all-sizes one.
         let file = envfield::nets::model_file(&models, "context", n).unwrap();
-        let net = envfield::nets::FieldNet::load(&file).unwrap();
+        let mut net = envfield::nets::FieldNet::load(&file).unwrap();
+        net.set_rule(MoveRule::Vin);
         let planner = FieldDescent::new(&net, MoveRule::Vin);
         let relay = RelayDescent::new(&net, MoveRule::Vin, 1);
         let mazes: Vec<Maze> = envfield::grid::read_mazes(&path)
@@ -330,7 +329,7 @@ fn shipped_field_model_solves_vin_test_sets() {
             report.summary.success_rate
         );
         assert!(
-            report.summary.path_ratio < 1.05,
+            report.summary.path_ratio < 1.01,
             "{}",
             report.summary.path_ratio
         );
@@ -349,5 +348,49 @@ fn shipped_field_model_solves_vin_test_sets() {
             relayed.summary.success_rate
         );
         assert!(relayed.summary.path_ratio < 1.05);
+    }
+}
+
+/// The shipped field, trained on gridworlds of 8, 16 and 28 cells only, plans perfect mazes and
+/// rooms of sizes and layouts it never saw (strict rule) about as well as the exact field, where
+/// the wall-blind octile control fails most pairs; the field's paths stay within 1% of the
+/// shortest. A small sample of the suite's figures (`cargo run --release --example suite`).
+#[test]
+fn shipped_field_plans_layouts_and_sizes_it_never_saw() {
+    let models = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("models");
+    let mut net = envfield::nets::FieldNet::load(models.join("context.safetensors")).unwrap();
+    net.set_rule(MoveRule::Strict);
+    let cfg = EvalConfig {
+        rule: MoveRule::Strict,
+        pairs_per_maze: 2,
+        seed: 11,
+    };
+    for (kind, size) in [(GeneratorKind::Perfect, 41), (GeneratorKind::Rooms, 48)] {
+        let mazes = MazeGenerator::new(kind, size)
+            .unwrap()
+            .generate_many(10, 77)
+            .unwrap();
+        let field = evaluate(
+            &FieldDescent::new(&net, MoveRule::Strict),
+            &mazes,
+            &cfg,
+            &mut |_, _| {},
+        )
+        .unwrap();
+        let octile = evaluate(
+            &FieldDescent::new(envfield::plan::Octile, MoveRule::Strict),
+            &mazes,
+            &cfg,
+            &mut |_, _| {},
+        )
+        .unwrap();
+        let (f, o) = (&field.summary, &octile.summary);
+        assert_eq!(f.pairs, 20);
+        assert_eq!(f.success_rate, 100.0, "{kind} {size}: {f:?}");
+        assert!(f.path_ratio < 1.01, "{kind} {size}: {f:?}");
+        assert!(
+            o.success_rate < 60.0,
+            "{kind} {size}: the control solves too many: {o:?}"
+        );
     }
 }

@@ -322,9 +322,11 @@ impl ModelConfig {
                             "context: path and propagation are two readouts; give one".into(),
                         ));
                     }
-                    if c.encoder.is_empty() {
+                    if c.goal_channel {
                         return Err(NetsError::InvalidConfig(
-                            "context path: the move costs need at least one convolution".into(),
+                            "context path: the move costs are the maze's, the same for every \
+                             goal: set goal_channel false"
+                                .into(),
                         ));
                     }
                     return Ok(());

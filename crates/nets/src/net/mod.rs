@@ -202,14 +202,57 @@ impl FieldNet {
         Ok(((encoded * &mask)? + (mask - 1.0)?)?)
     }
 
+    /// The learned move costs of a shortest-path readout on `grid` (in cells), eight per cell
+    /// in [`envfield_grid::DIRECTIONS_8`] order, cells row-major; every move is costed,
+    /// legal or not (the recurrence takes only the legal ones). What the network learned, to
+    /// set beside the exact 1 and sqrt 2.
+    ///
+    /// # Errors
+    /// [`NetsError::InvalidInput`] for a network without a shortest-path readout or a grid
+    /// of more than [`MAX_FIELD_CELLS`] cells.
+    pub fn move_costs(&self, grid: &Grid2) -> Result<Vec<[f32; 8]>> {
+        let (
+            Net::Context {
+                encoder,
+                path: Some(layer),
+                ..
+            },
+            ModelConfig::Context(c),
+        ) = (&self.net, &self.config)
+        else {
+            return Err(NetsError::InvalidInput(format!(
+                "a {} network without a shortest-path readout has no move costs",
+                self.config.arch()
+            )));
+        };
+        if grid.len() > MAX_FIELD_CELLS {
+            return Err(NetsError::InvalidInput(format!(
+                "a {}x{} grid is more than {MAX_FIELD_CELLS} cells",
+                grid.rows(),
+                grid.cols()
+            )));
+        }
+        let batch = Batch::points(grid, Cell2::new(0, 0), &[]);
+        let input = self.grid_input(&batch, c.goal_channel)?;
+        let features = encoder.forward_inference(&input)?;
+        let costs = layer.costs(&features)?.flatten_all()?.to_vec1::<f32>()?;
+        Ok(costs
+            .chunks_exact(MOVES)
+            .map(|m| std::array::from_fn(|k| m[k]))
+            .collect())
+    }
+
     /// The field of a network with a shortest-path readout: the encoder and the costs without
     /// gradients, then one Dijkstra pass; cells the goal does not reach are infinite.
     fn path_field(&self, grid: &Grid2, goal: Cell2) -> Result<Field2> {
-        let (Net::Context {
-            encoder,
-            path: Some(layer),
-            ..
-        }, ModelConfig::Context(c)) = (&self.net, &self.config)
+        let (
+            Net::Context {
+                encoder,
+                path: Some(layer),
+                ..
+            },
+            ModelConfig::Context(c),
+        ) = (&self.net, &self.config)
         else {
             unreachable!("only called for shortest-path readouts")
         };

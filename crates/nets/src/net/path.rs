@@ -326,7 +326,18 @@ mod tests {
     #[test]
     fn exact_costs_give_the_graph_distance() {
         let costs: Vec<f32> = (0..9)
-            .flat_map(|_| [1.0, 1.0, 1.0, 1.0, 2f32.sqrt(), 2f32.sqrt(), 2f32.sqrt(), 2f32.sqrt()])
+            .flat_map(|_| {
+                [
+                    1.0,
+                    1.0,
+                    1.0,
+                    1.0,
+                    2f32.sqrt(),
+                    2f32.sqrt(),
+                    2f32.sqrt(),
+                    2f32.sqrt(),
+                ]
+            })
             .collect();
         let strict = op(3, 3, &[4], 0, MoveRule::Strict).solve(0, &costs);
         // Around the wall: (0,2) is 2 away, (2,2) 4 (no diagonal past the wall's corners).
@@ -337,6 +348,44 @@ mod tests {
         assert_eq!(strict.first_move[4], u8::MAX);
         let vin = op(3, 3, &[4], 0, MoveRule::Vin).solve(0, &costs);
         assert!((vin.values[8] - (2.0 + 2f32.sqrt())).abs() < 1e-6);
+    }
+
+    /// Whatever the (positive) costs, every reached cell but the goal has a legal move to a
+    /// strictly smaller value, under both rules: descent on the fixed point cannot stall.
+    #[test]
+    fn random_costs_leave_no_local_minimum() {
+        let mut rng = envfield_grid::SplitMix64::new(17);
+        for trial in 0..40 {
+            let (rows, cols) = (3 + rng.below(9), 3 + rng.below(9));
+            let n = rows * cols;
+            let walls: Vec<usize> = (0..n).filter(|_| rng.below(3) == 0).collect();
+            let goal = (0..n).find(|i| !walls.contains(i)).unwrap_or(0);
+            if walls.contains(&goal) {
+                continue;
+            }
+            let costs: Vec<f32> = (0..n * MOVES)
+                .map(|_| 0.05 + 10.0 * rng.below(1000) as f32 / 1000.0)
+                .collect();
+            for rule in [MoveRule::Strict, MoveRule::Vin] {
+                let mp = op(rows, cols, &walls, goal, rule);
+                let solved = mp.solve(0, &costs);
+                let reached = mp.reached(0);
+                for x in (0..n).filter(|&x| reached[x] && x != goal) {
+                    let k = solved.first_move[x] as usize;
+                    let y = mp
+                        .step(&mp.free, x / cols, x % cols, k)
+                        .expect("a legal move");
+                    assert!(
+                        solved.values[y] < solved.values[x],
+                        "trial {trial} {rule}: cell {x}"
+                    );
+                }
+                // Exactly the reached cells have a first move (or are the goal).
+                for x in 0..n {
+                    assert_eq!(reached[x], x == goal || solved.first_move[x] != u8::MAX);
+                }
+            }
+        }
     }
 
     /// The op's gradient matches central finite differences of a weighted sum of the values.
@@ -352,7 +401,10 @@ mod tests {
             Ok((t.apply_op1(mp.clone())? * &weights)?.sum_all()?)
         };
         let grads = loss(var.as_tensor())?.backward()?;
-        let g = grads.get(var.as_tensor()).expect("gradient").flatten_all()?;
+        let g = grads
+            .get(var.as_tensor())
+            .expect("gradient")
+            .flatten_all()?;
         let g = g.to_vec1::<f32>()?;
         let x = base.flatten_all()?.to_vec1::<f32>()?;
         let eps = 1e-3f32;
@@ -365,7 +417,11 @@ mod tests {
                 Ok(loss(&t)?.to_scalar::<f32>()?)
             };
             let fd = (at(eps)? - at(-eps)?) / (2.0 * eps);
-            assert!((fd - g[i]).abs() < 2e-2, "cost {i}: analytic {} numeric {fd}", g[i]);
+            assert!(
+                (fd - g[i]).abs() < 2e-2,
+                "cost {i}: analytic {} numeric {fd}",
+                g[i]
+            );
             checked += (g[i] != 0.0) as usize;
         }
         assert!(checked > 5, "only {checked} costs carry a gradient");
