@@ -13,8 +13,10 @@
 //!   bird's-eye floor map.
 //! - [`affordance`] (feature `scene`): SMPL-layout poses and sequences, procedural motions,
 //!   support and collision checks, alignment to trajectories.
+//! - [`vae`] (feature `vae`): the conditional VAE of torso locations, accessible regions, and
+//!   exact and learned 3D fields.
 //!
-//! Both features are on by default. With `default-features = false` envfield is grids, fast
+//! The three features are on by default. With `default-features = false` envfield is grids, fast
 //! marching, mazes and planners, and pulls in neither candle nor parry3d. The `cuda` feature
 //! runs the networks on an NVIDIA GPU through candle.
 //!
@@ -41,6 +43,8 @@ pub use envfield_nets as nets;
 pub use envfield_plan as plan;
 #[cfg(feature = "scene")]
 pub use envfield_scene as scene;
+#[cfg(feature = "vae")]
+pub use envfield_vae as vae;
 
 // The README's Rust example runs as a doc test.
 #[cfg(doctest)]

@@ -60,7 +60,7 @@ pub use field::{Field2, Field3};
 pub use grid::{Grid2, Grid3};
 pub use io::{check_writable, write_atomic};
 pub use maze::{format_mazes, parse_mazes, read_mazes, write_mazes, Maze};
-pub use model::{ContinuousField2, FieldModel};
+pub use model::{ContinuousField2, ContinuousField3, FieldModel, Point3m};
 pub use moves::{MoveRule, Neighbourhood2, Neighbourhood3, DIRECTIONS_8};
 pub use npy::{NpyArray, NpyData};
 pub use png::{HeatMapStyle, MAX_PNG_PIXELS, OBSTACLE_COLOR, UNREACHABLE_COLOR};

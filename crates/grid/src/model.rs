@@ -1,5 +1,8 @@
 use crate::{Cell2, Field2, Grid2, Point2, Result};
 
+/// A point in a 3D field's own frame, as `[x, y, z]` (metres for the fields of 3D scenes).
+pub type Point3m = [f32; 3];
+
 /// The seam between learning and planning: anything that can answer "the reaching-distance
 /// field of this grid for this goal".
 ///
@@ -33,6 +36,50 @@ pub trait ContinuousField2 {
     /// # Errors
     /// As [`ContinuousField2::value`].
     fn gradient(&self, p: Point2) -> Result<Option<(f32, f32)>>;
+}
+
+/// A continuous reaching-distance field in 3D, for queries at arbitrary points in the field's
+/// own frame (metres, z up, for the fields of 3D scenes): the exact field of an accessible
+/// region (trilinear) and a learned one answer alike, so 3D planners need no candle.
+///
+/// Values are distances to the field's goal; points outside the accessible region are
+/// `f32::INFINITY`.
+pub trait ContinuousField3 {
+    /// The reaching distance at `p`.
+    ///
+    /// # Errors
+    /// When `p` is not finite or lies outside the field's domain, or the model fails.
+    fn value(&self, p: Point3m) -> Result<f32>;
+
+    /// The reaching distances at many points; a learned field answers them in one network
+    /// pass.
+    ///
+    /// # Errors
+    /// As [`ContinuousField3::value`], for the first bad point.
+    fn values(&self, points: &[Point3m]) -> Result<Vec<f32>> {
+        points.iter().map(|&p| self.value(p)).collect()
+    }
+
+    /// The gradient at `p`, or `Ok(None)` where the field has none (outside the accessible
+    /// region, or beside its edge for a sampled field).
+    ///
+    /// # Errors
+    /// As [`ContinuousField3::value`].
+    fn gradient(&self, p: Point3m) -> Result<Option<Point3m>>;
+}
+
+impl<F: ContinuousField3 + ?Sized> ContinuousField3 for &F {
+    fn value(&self, p: Point3m) -> Result<f32> {
+        (**self).value(p)
+    }
+
+    fn values(&self, points: &[Point3m]) -> Result<Vec<f32>> {
+        (**self).values(points)
+    }
+
+    fn gradient(&self, p: Point3m) -> Result<Option<Point3m>> {
+        (**self).gradient(p)
+    }
 }
 
 impl ContinuousField2 for Field2 {

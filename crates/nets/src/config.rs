@@ -29,6 +29,11 @@ pub struct GoalConfig {
     /// How distances are encoded as outputs.
     #[serde(default)]
     pub encoding: TargetEncoding,
+    /// The MLP predicts the detour: the distance is the straight-line distance between goal
+    /// and query (in cells) plus the MLP's output, then encoded. In open space the detour is
+    /// 0, so the network learns only what the obstacles add. Off in the paper's network.
+    #[serde(default)]
+    pub detour: bool,
 }
 
 /// The context-aligned implicit function (paper Fig. 4c): a fully convolutional encoder of the
@@ -410,6 +415,7 @@ impl Arch {
                 extent: vec![rows, cols],
                 mlp,
                 encoding,
+                detour: false,
             }),
             Self::Context => ModelConfig::Context(ContextConfig {
                 encoding,

@@ -43,7 +43,7 @@ mod files;
 mod kernel;
 mod layers;
 mod net;
-mod params;
+pub mod params;
 mod train;
 mod vin;
 

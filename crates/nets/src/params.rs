@@ -1,5 +1,7 @@
 //! Named parameters with seeded initialisation, the AdamW optimiser, and the safetensors
-//! checkpoint format.
+//! checkpoint format: the building blocks of envfield-nets's networks, public so that other
+//! crates (envfield-vae) follow the same conventions (seeded weights, moments in checkpoints,
+//! configs in file metadata, shapes checked on load).
 
 use crate::{NetsError, Result};
 use candle_core::{Device, Tensor, Var};
@@ -10,11 +12,11 @@ use std::path::Path;
 
 /// The most parameters a network may have (512 MB of f32): a config past it is a typo, and
 /// refusing it beats an allocation that aborts.
-pub(crate) const MAX_PARAMETERS: usize = 1 << 27;
+pub const MAX_PARAMETERS: usize = 1 << 27;
 
 /// How a parameter starts.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) enum Init {
+pub enum Init {
     /// All zeros.
     Zeros,
     /// Normal with mean 0 and this standard deviation.
@@ -27,7 +29,7 @@ pub(crate) enum Init {
 /// Initialisation draws from a seeded [`SplitMix64`], so a config and a seed give the same
 /// network on every machine.
 #[derive(Debug)]
-pub(crate) struct ParamStore {
+pub struct ParamStore {
     names: Vec<String>,
     vars: Vec<Var>,
     rng: SplitMix64,
@@ -39,7 +41,8 @@ fn unit(rng: &mut SplitMix64) -> f64 {
 }
 
 impl ParamStore {
-    pub(crate) fn new(seed: u64, device: &Device) -> Self {
+    /// An empty store whose initialisation draws from `seed`, on `device`.
+    pub fn new(seed: u64, device: &Device) -> Self {
         Self {
             names: Vec::new(),
             vars: Vec::new(),
@@ -49,7 +52,7 @@ impl ParamStore {
     }
 
     /// Creates the parameter `name` of `shape` and returns its tensor (which tracks gradients).
-    pub(crate) fn add(&mut self, name: String, shape: &[usize], init: Init) -> Result<Tensor> {
+    pub fn add(&mut self, name: String, shape: &[usize], init: Init) -> Result<Tensor> {
         debug_assert!(!self.names.contains(&name), "duplicate parameter {name}");
         let n = shape
             .iter()
@@ -81,16 +84,18 @@ impl ParamStore {
         Ok(t)
     }
 
-    pub(crate) fn vars(&self) -> &[Var] {
+    /// The parameters, in creation order.
+    pub fn vars(&self) -> &[Var] {
         &self.vars
     }
 
-    pub(crate) fn names(&self) -> &[String] {
+    /// The parameters' names, in creation order.
+    pub fn names(&self) -> &[String] {
         &self.names
     }
 
     /// Total number of scalars.
-    pub(crate) fn count(&self) -> usize {
+    pub fn count(&self) -> usize {
         self.vars.iter().map(|v| v.elem_count()).sum()
     }
 }
@@ -98,19 +103,25 @@ impl ParamStore {
 /// AdamW (decoupled weight decay) with bias correction; its moments travel in checkpoints so
 /// training resumes exactly where it stopped.
 #[derive(Debug)]
-pub(crate) struct AdamW {
-    pub(crate) lr: f64,
+pub struct AdamW {
+    /// The learning rate of the next step.
+    pub lr: f64,
     beta1: f64,
     beta2: f64,
     eps: f64,
     weight_decay: f64,
-    pub(crate) step: u64,
+    /// Steps taken.
+    pub step: u64,
     m: Vec<Tensor>,
     v: Vec<Tensor>,
 }
 
 impl AdamW {
-    pub(crate) fn new(vars: &[Var], lr: f64, betas: (f64, f64), eps: f64, wd: f64) -> Result<Self> {
+    /// An optimiser for `vars` at step 0, with zero moments.
+    ///
+    /// # Errors
+    /// Tensor errors from allocating the moments.
+    pub fn new(vars: &[Var], lr: f64, betas: (f64, f64), eps: f64, wd: f64) -> Result<Self> {
         let zeros = |v: &Var| v.zeros_like();
         Ok(Self {
             lr,
@@ -125,7 +136,7 @@ impl AdamW {
     }
 
     /// One update from the gradients of `loss`.
-    pub(crate) fn backward_step(&mut self, vars: &[Var], loss: &Tensor) -> Result<()> {
+    pub fn backward_step(&mut self, vars: &[Var], loss: &Tensor) -> Result<()> {
         let grads = loss.backward()?;
         self.step += 1;
         let t = self.step as i32;
@@ -158,7 +169,7 @@ impl AdamW {
 
     /// The moments named for a checkpoint, `m` then `v` for each of `names` (the
     /// parameters' names, in the order of the vars this optimiser was made for).
-    pub(crate) fn state_tensors(&self, names: &[String]) -> Vec<(String, Tensor)> {
+    pub fn state_tensors(&self, names: &[String]) -> Vec<(String, Tensor)> {
         let mut out = Vec::with_capacity(2 * names.len());
         for (i, name) in names.iter().enumerate() {
             out.push((moment_name('m', name), self.m[i].clone()));
@@ -167,7 +178,8 @@ impl AdamW {
         out
     }
 
-    pub(crate) fn set_moments(&mut self, m: Vec<Tensor>, v: Vec<Tensor>, step: u64) {
+    /// Restores moments and the step count (from [`TensorFile::take_moments`]).
+    pub fn set_moments(&mut self, m: Vec<Tensor>, v: Vec<Tensor>, step: u64) {
         self.m = m;
         self.v = v;
         self.step = step;
@@ -175,14 +187,14 @@ impl AdamW {
 }
 
 /// Names of optimiser tensors in checkpoints start with this.
-pub(crate) const OPTIMISER_PREFIX: &str = "optimiser.";
+pub const OPTIMISER_PREFIX: &str = "optimiser.";
 
 /// The metadata key of a checkpoint's step (absent from plain weight files).
-pub(crate) const META_STEP: &str = "envfield.step";
+pub const META_STEP: &str = "envfield.step";
 
 /// The checkpoint name of the moving average of parameter `name` (with the optimiser's
 /// prefix, so weight loaders skip it).
-pub(crate) fn ema_name(name: &str) -> String {
+pub fn ema_name(name: &str) -> String {
     format!("{OPTIMISER_PREFIX}ema.{name}")
 }
 
@@ -190,13 +202,15 @@ fn moment_name(kind: char, name: &str) -> String {
     format!("{OPTIMISER_PREFIX}{kind}.{name}")
 }
 
-/// Metadata keys of an envfield-nets safetensors file.
-pub(crate) const META_FORMAT: &str = "envfield.format";
-pub(crate) const FORMAT: &str = "envfield-nets/1";
-pub(crate) const META_CONFIG: &str = "envfield.model";
+/// The metadata key of a file's format.
+pub const META_FORMAT: &str = "envfield.format";
+/// The format of envfield-nets's files.
+pub const FORMAT: &str = "envfield-nets/1";
+/// The metadata key of a file's model config (JSON).
+pub const META_CONFIG: &str = "envfield.model";
 
 /// Serialises named f32 tensors and metadata into safetensors bytes.
-pub(crate) fn to_safetensors(
+pub fn to_safetensors(
     tensors: &[(String, Tensor)],
     metadata: HashMap<String, String>,
 ) -> Result<Vec<u8>> {
@@ -217,13 +231,28 @@ pub(crate) fn to_safetensors(
 }
 
 /// A safetensors file read into memory: its metadata and its f32 tensors by name.
-pub(crate) struct TensorFile {
-    pub(crate) metadata: HashMap<String, String>,
-    pub(crate) tensors: HashMap<String, (Vec<usize>, Vec<f32>)>,
+pub struct TensorFile {
+    /// The file's metadata.
+    pub metadata: HashMap<String, String>,
+    /// Its tensors: shape and values by name.
+    pub tensors: HashMap<String, (Vec<usize>, Vec<f32>)>,
 }
 
 impl TensorFile {
-    pub(crate) fn read(path: &Path) -> Result<Self> {
+    /// Reads an envfield-nets file ([`FORMAT`]).
+    ///
+    /// # Errors
+    /// [`NetsError::Checkpoint`] for an unreadable, truncated or foreign file.
+    pub fn read(path: &Path) -> Result<Self> {
+        Self::read_format(path, FORMAT)
+    }
+
+    /// Reads a safetensors file whose [`META_FORMAT`] metadata is `format`, with f32 tensors
+    /// only.
+    ///
+    /// # Errors
+    /// [`NetsError::Checkpoint`] for an unreadable, truncated or foreign file.
+    pub fn read_format(path: &Path, format: &str) -> Result<Self> {
         let bad = |reason: String| NetsError::Checkpoint {
             path: path.to_path_buf(),
             reason,
@@ -235,11 +264,11 @@ impl TensorFile {
             .map_err(|e| bad(format!("not a safetensors file or truncated ({e})")))?;
         let metadata = meta.metadata().clone().unwrap_or_default();
         match metadata.get(META_FORMAT) {
-            Some(f) if f == FORMAT => {}
-            Some(f) => return Err(bad(format!("format `{f}`, expected `{FORMAT}`"))),
+            Some(f) if f == format => {}
+            Some(f) => return Err(bad(format!("format `{f}`, expected `{format}`"))),
             None => {
                 return Err(bad(format!(
-                    "no `{META_FORMAT}` metadata (not written by envfield-nets)"
+                    "no `{META_FORMAT}` metadata (not written by envfield)"
                 )))
             }
         }
@@ -263,7 +292,7 @@ impl TensorFile {
 
     /// Takes Adam's moments for the parameters of `store` (as written by
     /// [`AdamW::state_tensors`]), checking their shapes.
-    pub(crate) fn take_moments(
+    pub fn take_moments(
         &mut self,
         path: &Path,
         store: &ParamStore,
@@ -280,7 +309,7 @@ impl TensorFile {
     /// Takes the moving average of the weights of `store` (as written by the trainer under
     /// [`ema_name`]), checking shapes. `None` when the file keeps no average, unless
     /// `required`: then a missing tensor is an error.
-    pub(crate) fn take_average(
+    pub fn take_average(
         &mut self,
         path: &Path,
         store: &ParamStore,
@@ -305,7 +334,7 @@ impl TensorFile {
     }
 
     /// Takes tensor `name`, checking its shape.
-    pub(crate) fn take(
+    pub fn take(
         &mut self,
         path: &Path,
         name: &str,

@@ -157,6 +157,7 @@ fn all_configs() -> Vec<ModelConfig> {
             encoding: TargetEncoding::Linear { scale: 20.0 },
         }),
         ModelConfig::Goal(GoalConfig {
+            detour: false,
             extent: vec![6, 7],
             mlp: MlpConfig {
                 hidden: 8,

@@ -373,7 +373,14 @@ impl FieldNet {
             (Net::Goal(mlp), ModelConfig::Goal(c)) => {
                 let g = encode_coords(&self.normalise(&goals, &batch.extent)?, c.mlp.fourier)?;
                 let q = encode_coords(&self.normalise(queries, &batch.extent)?, c.mlp.fourier)?;
-                mlp.forward(&Tensor::cat(&[&g, &q], 1)?)?
+                let raw = mlp.forward(&Tensor::cat(&[&g, &q], 1)?)?;
+                if c.detour {
+                    // The straight line, kept off 0 so its gradient stays finite at the goal.
+                    let line = ((queries - &goals)?.sqr()?.sum_keepdim(1)? + 1e-6)?.sqrt()?;
+                    encode_distance(&(line + raw)?, c.encoding)?
+                } else {
+                    raw
+                }
             }
             (
                 Net::Context {
@@ -544,6 +551,15 @@ impl FieldNet {
             goal,
         })
     }
+}
+
+/// Distances (N, 1) in cells encoded as outputs: `1 - d / scale` (not clamped, so a blocked
+/// target of -1 stays reachable) or `1 / (1 + max(d, 0))`.
+fn encode_distance(d: &Tensor, encoding: TargetEncoding) -> Result<Tensor> {
+    Ok(match encoding {
+        TargetEncoding::Reciprocal => (d.relu()? + 1.0)?.recip()?,
+        TargetEncoding::Linear { scale } => d.affine(-1.0 / scale as f64, 1.0)?,
+    })
 }
 
 fn model_error(name: &str, e: NetsError) -> GridError {

@@ -1,0 +1,367 @@
+//! Training data made here: torso locations of people walking, sitting and lying in generated
+//! rooms, and every place a standing pose is supported and collision-free (the paper's
+//! augmentation, appendix "Network Training").
+
+use crate::{Result, VaeError};
+use envfield_affordance::{
+    align_in_scene, check_pose, check_sequence, lie_down, resample_path, sit_down, standing_pose,
+    walk, AffordanceConfig, AlignConfig, LieConfig, Pose, PoseSequence, SitConfig, Support,
+    WalkConfig,
+};
+use envfield_eikonal::FastMarching;
+use envfield_grid::{MoveRule, SplitMix64};
+use envfield_scene::nalgebra::{Point3, Vector3};
+use envfield_scene::{
+    floor_map, free_components, generate_room, sample_surface, FloorMapConfig, Furniture,
+    ObjectKind, Room, RoomConfig, Scene,
+};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+/// How [`room_torsos`] gathers a room's torso locations.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TorsoDataConfig {
+    /// Walks between random floor points per room.
+    pub walks: usize,
+    /// Spacing of the floor grid on which standing poses are tried (the augmentation), metres.
+    pub floor_spacing: f32,
+    /// Surface points sampled per room for its cloud.
+    pub cloud_points: usize,
+    /// Body radius kept from obstacles when planning the walks, metres.
+    pub body_radius: f32,
+    /// Resolution of the floor map the walks are planned on, metres.
+    pub floor_resolution: f32,
+}
+
+impl Default for TorsoDataConfig {
+    fn default() -> Self {
+        Self {
+            walks: 4,
+            floor_spacing: 0.2,
+            cloud_points: 2048,
+            body_radius: 0.25,
+            floor_resolution: 0.05,
+        }
+    }
+}
+
+/// Where a torso location came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TorsoSource {
+    /// A frame of a walk along an exact floor path.
+    Walk,
+    /// A frame of sitting down onto a seat.
+    Sit,
+    /// A frame of lying down on a bed or sofa.
+    Lie,
+    /// A standing pose on the floor grid (the augmentation).
+    Stand,
+}
+
+/// One room's training data: its surface cloud and the torso locations of valid poses in it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RoomTorsos {
+    /// Surface points of the room, metres.
+    pub cloud: Vec<[f32; 3]>,
+    /// Torso (pelvis) locations, metres.
+    pub torsos: Vec<[f32; 3]>,
+    /// Where each torso location came from.
+    pub sources: Vec<TorsoSource>,
+}
+
+/// The torso locations of a sequence's valid frames.
+fn valid_torsos(scene: &Scene, seq: &PoseSequence) -> Result<Vec<[f32; 3]>> {
+    let reports = check_sequence(scene, seq, &AffordanceConfig::default())?;
+    Ok(seq
+        .frames
+        .iter()
+        .zip(reports)
+        .filter(|(_, r)| r.valid())
+        .map(|(f, _)| {
+            let t = f.torso();
+            [t.x, t.y, t.z]
+        })
+        .collect())
+}
+
+/// `seq` turned so that its +x faces `front` (about the origin), then moved by `to`.
+fn placed(seq: &PoseSequence, front: [f32; 2], to: Vector3<f32>) -> Result<PoseSequence> {
+    let angle = front[1].atan2(front[0]);
+    let frames = seq
+        .frames
+        .iter()
+        .map(|f| f.rotated_about_z(angle, &Point3::origin()).translated(&to))
+        .collect();
+    Ok(PoseSequence::new(
+        seq.fps,
+        seq.activity,
+        frames,
+        seq.supports.clone(),
+    )?)
+}
+
+/// The direction a piece of furniture's front faces.
+fn front(f: &Furniture) -> [f32; 2] {
+    let (s, c) = f.yaw.sin_cos();
+    [-s, c]
+}
+
+/// Sitting down onto the middle of `seat` (facing its front), when it has a seat between 0.3
+/// and 0.75 m.
+pub fn sit_on(seat: &Furniture) -> Result<Option<PoseSequence>> {
+    let (Some(h), Some(c)) = (seat.seat_height, seat.seat_center()) else {
+        return Ok(None);
+    };
+    if !(0.3..=0.75).contains(&h) {
+        return Ok(None);
+    }
+    let seq = sit_down(&SitConfig {
+        seat_height: h,
+        ..SitConfig::default()
+    })?;
+    Ok(Some(placed(
+        &seq,
+        front(seat),
+        Vector3::new(c.x, c.y, 0.0),
+    )?))
+}
+
+/// Lying down on `bed`: seated on its front edge, facing out, then on the back towards its
+/// head end.
+pub fn lie_on(bed: &Furniture) -> Result<Option<PoseSequence>> {
+    let (Some(h), Some(c)) = (bed.seat_height, bed.seat_center()) else {
+        return Ok(None);
+    };
+    if !(0.3..=0.75).contains(&h) || !matches!(bed.kind, ObjectKind::Bed | ObjectKind::Sofa) {
+        return Ok(None);
+    }
+    let f = front(bed);
+    // From the front edge, a quarter of the depth back in; slide half the depth.
+    let edge = bed.size[1] / 2.0 - 0.25;
+    let seq = lie_down(&LieConfig {
+        seat_height: h,
+        slide: (bed.size[1] / 2.0).clamp(0.0, 1.0),
+        ..LieConfig::default()
+    })?;
+    let to = Vector3::new(c.x + f[0] * edge, c.y + f[1] * edge, 0.0);
+    Ok(Some(placed(&seq, f, to)?))
+}
+
+/// The standing pose with its torso at `(x, y)` over the floor, facing +x.
+fn standing_at(x: f32, y: f32) -> Pose {
+    let p = standing_pose();
+    let t = p.torso();
+    p.translated(&Vector3::new(x - t.x, y - t.y, 0.0))
+}
+
+/// The torso locations of every standing pose on a floor grid of `spacing` metres over
+/// `bounds` (`[x_min, y_min, x_max, y_max]`, the floor at z = 0) that is supported and
+/// collision-free: the standing-affordable floor.
+///
+/// # Errors
+/// [`VaeError::InvalidConfig`] for a spacing under 1 cm or bounds that are not finite or hold
+/// more than 4 million grid points.
+pub fn standing_floor(scene: &Scene, bounds: [f32; 4], spacing: f32) -> Result<Vec<[f32; 3]>> {
+    if !(spacing.is_finite() && spacing > 0.01 && bounds.iter().all(|b| b.is_finite())) {
+        return Err(VaeError::InvalidConfig(format!(
+            "floor grid: spacing above 0.01 m and finite bounds (got {spacing} and {bounds:?})"
+        )));
+    }
+    let count = |lo: f32, hi: f32| ((hi - lo).max(0.0) / spacing) as usize;
+    let (nx, ny) = (count(bounds[0], bounds[2]), count(bounds[1], bounds[3]));
+    if nx.saturating_mul(ny) > 4_000_000 {
+        return Err(VaeError::InvalidConfig(format!(
+            "floor grid: {nx} x {ny} points at {spacing} m is more than 4 million"
+        )));
+    }
+    let cells: Vec<(usize, usize)> = (0..nx).flat_map(|i| (0..ny).map(move |j| (i, j))).collect();
+    let found: Vec<Option<[f32; 3]>> = cells
+        .par_iter()
+        .map(|&(i, j)| -> Result<Option<[f32; 3]>> {
+            let pose = standing_at(
+                bounds[0] + (i as f32 + 0.5) * spacing,
+                bounds[1] + (j as f32 + 0.5) * spacing,
+            );
+            let r = check_pose(
+                scene,
+                &pose,
+                Support::Standing,
+                &AffordanceConfig::default(),
+            )?;
+            let t = pose.torso();
+            Ok(r.valid().then_some([t.x, t.y, t.z]))
+        })
+        .collect::<Result<_>>()?;
+    Ok(found.into_iter().flatten().collect())
+}
+
+/// Walks between random floor points along the exact floor path (fast marching on the
+/// bird's-eye map, inflated by the body radius), each with a seeded gait: the torsos of the
+/// valid frames.
+fn walks(room: &Room, cfg: &TorsoDataConfig, seed: u64) -> Result<Vec<[f32; 3]>> {
+    let map = floor_map(
+        &room.scene,
+        &FloorMapConfig {
+            resolution: cfg.floor_resolution,
+            ..FloorMapConfig::default()
+        },
+    )?;
+    let walkable = map.inflated(cfg.body_radius)?;
+    let (labels, sizes) = free_components(&walkable);
+    let Some(largest) = (0..sizes.len()).max_by_key(|&k| sizes[k]) else {
+        return Ok(Vec::new());
+    };
+    let cells: Vec<usize> = (0..labels.len())
+        .filter(|&i| labels[i] == largest)
+        .collect();
+    let mut rng = SplitMix64::new(seed ^ 0x3A1C);
+    let mut out = Vec::new();
+    let fmm = FastMarching::default();
+    for w in 0..cfg.walks {
+        let start = walkable.cell(cells[rng.below(cells.len())]);
+        let goal = walkable.cell(cells[rng.below(cells.len())]);
+        if start == goal {
+            continue;
+        }
+        let field = fmm.solve2(&walkable, &[goal])?;
+        let plan = descend_cells(&walkable, &field, start, goal);
+        if plan.len() < 2 {
+            continue;
+        }
+        let points: Vec<Point3<f32>> = plan
+            .iter()
+            .map(|&c| {
+                let [x, y] = map.frame.center(c);
+                Point3::new(x, y, 0.0)
+            })
+            .collect();
+        let gait = walk(&WalkConfig::default(), seed.wrapping_add(w as u64))?;
+        let trajectory = resample_path(&points, gait.step_length().max(0.01))?;
+        let (aligned, reports) = align_in_scene(
+            &room.scene,
+            &gait,
+            &trajectory,
+            &AlignConfig {
+                keep_height: true,
+                ..AlignConfig::default()
+            },
+        )?;
+        out.extend(
+            aligned
+                .frames
+                .iter()
+                .zip(&reports)
+                .filter(|(_, r)| r.valid())
+                .map(|(f, _)| {
+                    let t = f.torso();
+                    [t.x, t.y, t.z]
+                }),
+        );
+    }
+    Ok(out)
+}
+
+/// Descent on an exact floor field (8 moves, strict rule), as the cells it visits.
+fn descend_cells(
+    grid: &envfield_grid::Grid2,
+    field: &envfield_grid::Field2,
+    start: envfield_grid::Cell2,
+    goal: envfield_grid::Cell2,
+) -> Vec<envfield_grid::Cell2> {
+    let mut path = vec![start];
+    let mut here = start;
+    for _ in 0..grid.len() {
+        if here == goal {
+            return path;
+        }
+        match envfield_grid::descent_move(grid, field, MoveRule::Strict, here) {
+            Some(next) if field.get(next) < field.get(here) => {
+                path.push(next);
+                here = next;
+            }
+            _ => return Vec::new(),
+        }
+    }
+    Vec::new()
+}
+
+/// One room's torso locations: walks along exact floor paths, sitting down on every seat,
+/// lying down on every bed and sofa, and every supported standing pose on the floor grid.
+/// Only frames that are supported and collision-free are kept. Seeded.
+///
+/// # Errors
+/// Errors of the room's checks (they do not happen on generated rooms).
+pub fn room_torsos(room: &Room, cfg: &TorsoDataConfig, seed: u64) -> Result<RoomTorsos> {
+    let scene = &room.scene;
+    let mut torsos = Vec::new();
+    let mut sources = Vec::new();
+    let mut push = |ts: Vec<[f32; 3]>, s: TorsoSource| {
+        sources.extend(std::iter::repeat_n(s, ts.len()));
+        torsos.extend(ts);
+    };
+    push(walks(room, cfg, seed)?, TorsoSource::Walk);
+    for f in &room.furniture {
+        if let Some(seq) = sit_on(f)? {
+            push(valid_torsos(scene, &seq)?, TorsoSource::Sit);
+        }
+        if let Some(seq) = lie_on(f)? {
+            push(valid_torsos(scene, &seq)?, TorsoSource::Lie);
+        }
+    }
+    let bounds = [0.0, 0.0, room.size[0], room.size[1]];
+    push(
+        standing_floor(scene, bounds, cfg.floor_spacing)?,
+        TorsoSource::Stand,
+    );
+    let cloud = sample_surface(scene, cfg.cloud_points, seed ^ 0xC10D)?
+        .iter()
+        .map(|p| [p.x, p.y, p.z])
+        .collect();
+    Ok(RoomTorsos {
+        cloud,
+        torsos,
+        sources,
+    })
+}
+
+/// The rooms of seeds `seeds` (generated with the default [`RoomConfig`]) and their torso
+/// locations, in parallel.
+///
+/// # Errors
+/// As [`room_torsos`] and [`generate_room`].
+pub fn rooms_torsos(
+    seeds: std::ops::Range<u64>,
+    cfg: &TorsoDataConfig,
+) -> Result<Vec<(Room, RoomTorsos)>> {
+    seeds
+        .collect::<Vec<_>>()
+        .par_iter()
+        .map(|&s| {
+            let room = generate_room(&RoomConfig::default(), s)?;
+            let data = room_torsos(&room, cfg, s)?;
+            Ok((room, data))
+        })
+        .collect()
+}
+
+/// Which of a room's furniture someone can sit on, with the torso location of the sitting
+/// pose at its seat (the last frame of [`sit_on`]), whether that pose is valid or not.
+///
+/// # Errors
+/// As [`sit_on`].
+pub fn seat_torsos(room: &Room) -> Result<Vec<[f32; 3]>> {
+    let mut out = Vec::new();
+    for f in &room.furniture {
+        if matches!(
+            f.kind,
+            ObjectKind::Chair | ObjectKind::Sofa | ObjectKind::Bed
+        ) {
+            if let Some(seq) = sit_on(f)? {
+                let t = seq.frames.last().expect("a sequence has frames").torso();
+                out.push([t.x, t.y, t.z]);
+            }
+        }
+    }
+    Ok(out)
+}

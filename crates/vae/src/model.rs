@@ -1,0 +1,418 @@
+//! [`Cvae`]: the PointNet scene encoder and the conditional VAE of torso locations.
+
+use crate::{Result, VaeConfig, VaeError};
+use candle_core::{Device, Tensor, Var};
+use envfield_grid::SplitMix64;
+use envfield_nets::params::{
+    to_safetensors, Init, ParamStore, TensorFile, META_CONFIG, META_FORMAT,
+};
+use std::collections::HashMap;
+use std::path::Path;
+
+/// The format of envfield-vae's weight files and checkpoints.
+pub(crate) const FORMAT: &str = "envfield-vae/1";
+
+/// Named tensors and a file's metadata.
+pub(crate) type Named = (Vec<(String, Tensor)>, HashMap<String, String>);
+
+/// A dense layer `x W + b`.
+#[derive(Debug)]
+struct Dense {
+    w: Tensor,
+    b: Tensor,
+}
+
+impl Dense {
+    /// He-initialised weights for a ReLU layer, or small ones for an output layer.
+    fn new(
+        store: &mut ParamStore,
+        name: &str,
+        fan_in: usize,
+        fan_out: usize,
+        out: bool,
+    ) -> Result<Self> {
+        let std = if out {
+            0.01
+        } else {
+            (2.0 / fan_in as f32).sqrt()
+        };
+        Ok(Self {
+            w: store.add(
+                format!("{name}.weight"),
+                &[fan_in, fan_out],
+                Init::Normal(std),
+            )?,
+            b: store.add(format!("{name}.bias"), &[fan_out], Init::Zeros)?,
+        })
+    }
+
+    fn forward(&self, x: &Tensor) -> Result<Tensor> {
+        Ok(x.matmul(&self.w)?.broadcast_add(&self.b)?)
+    }
+}
+
+/// ReLU layers then a linear output layer.
+fn mlp(layers: &[Dense], out: &Dense, x: &Tensor) -> Result<Tensor> {
+    let mut h = x.clone();
+    for l in layers {
+        h = l.forward(&h)?.relu()?;
+    }
+    out.forward(&h)
+}
+
+/// The conditional VAE of torso locations ([`VaeConfig`]), its parameters and its device.
+///
+/// Points and torso locations are `[x, y, z]` in metres, z up, in the scene's frame.
+#[derive(Debug)]
+pub struct Cvae {
+    config: VaeConfig,
+    store: ParamStore,
+    pointnet: Vec<Dense>,
+    encoder: Vec<Dense>,
+    encoder_out: Dense,
+    decoder: Vec<Dense>,
+    decoder_out: Dense,
+    device: Device,
+}
+
+/// The loss of one batch and its parts (means over the batch's torso locations).
+#[derive(Debug)]
+pub(crate) struct Loss {
+    pub(crate) total: Tensor,
+    pub(crate) recon: f32,
+    pub(crate) kl: f32,
+}
+
+impl Cvae {
+    /// A freshly initialised VAE on the CPU; the same config and seed give the same weights.
+    ///
+    /// # Errors
+    /// [`VaeError::InvalidConfig`] for a bad config.
+    pub fn new(config: VaeConfig, seed: u64) -> Result<Self> {
+        Self::new_on(config, seed, &Device::Cpu)
+    }
+
+    /// As [`Cvae::new`] on `device`.
+    ///
+    /// # Errors
+    /// As [`Cvae::new`].
+    pub fn new_on(config: VaeConfig, seed: u64, device: &Device) -> Result<Self> {
+        config.validate()?;
+        let mut store = ParamStore::new(seed, device);
+        let mut pointnet = Vec::new();
+        let mut width = 3;
+        for (i, &w) in config.pointnet.iter().enumerate() {
+            pointnet.push(Dense::new(
+                &mut store,
+                &format!("pointnet.{i}"),
+                width,
+                w,
+                false,
+            )?);
+            width = w;
+        }
+        let feature = width;
+        let stack = |store: &mut ParamStore, name: &str, input: usize| -> Result<Vec<Dense>> {
+            let mut out = Vec::new();
+            let mut w = input;
+            for i in 0..config.layers {
+                out.push(Dense::new(
+                    store,
+                    &format!("{name}.{i}"),
+                    w,
+                    config.hidden,
+                    false,
+                )?);
+                w = config.hidden;
+            }
+            Ok(out)
+        };
+        let encoder = stack(&mut store, "encoder", feature + 3)?;
+        let encoder_out = Dense::new(
+            &mut store,
+            "encoder.out",
+            config.hidden,
+            2 * config.latent,
+            true,
+        )?;
+        let decoder = stack(&mut store, "decoder", feature + config.latent)?;
+        let decoder_out = Dense::new(&mut store, "decoder.out", config.hidden, 3, true)?;
+        Ok(Self {
+            config,
+            store,
+            pointnet,
+            encoder,
+            encoder_out,
+            decoder,
+            decoder_out,
+            device: device.clone(),
+        })
+    }
+
+    /// The VAE's config.
+    pub fn config(&self) -> &VaeConfig {
+        &self.config
+    }
+
+    /// Number of trainable scalars.
+    pub fn parameter_count(&self) -> usize {
+        self.store.count()
+    }
+
+    pub(crate) fn store(&self) -> &ParamStore {
+        &self.store
+    }
+
+    pub(crate) fn vars(&self) -> &[Var] {
+        self.store.vars()
+    }
+
+    pub(crate) fn device(&self) -> &Device {
+        &self.device
+    }
+
+    /// `points` normalised as a (len, 3) tensor, each checked finite; `what` names them in
+    /// errors.
+    pub(crate) fn coords(&self, points: &[[f32; 3]], what: &str) -> Result<Tensor> {
+        if points.is_empty() {
+            return Err(VaeError::InvalidInput(format!("{what}: no points")));
+        }
+        let (o, s) = (self.config.coord_offset, self.config.coord_scale);
+        let mut data = Vec::with_capacity(points.len() * 3);
+        for (i, p) in points.iter().enumerate() {
+            if !p.iter().all(|v| v.is_finite()) {
+                return Err(VaeError::InvalidInput(format!(
+                    "{what}: point {i} is not finite: {p:?}"
+                )));
+            }
+            data.extend((0..3).map(|a| (p[a] - o[a]) / s));
+        }
+        Ok(Tensor::from_vec(data, (points.len(), 3), &self.device)?)
+    }
+
+    /// (B, N, 3) normalised clouds -> (B, F) global features: the shared per-point MLP, then a
+    /// maximum over the points, so the feature does not depend on their order.
+    pub(crate) fn features(&self, clouds: &Tensor) -> Result<Tensor> {
+        let (b, n, _) = clouds.dims3()?;
+        let mut h = clouds.reshape((b * n, 3))?;
+        for l in &self.pointnet {
+            h = l.forward(&h)?.relu()?;
+        }
+        let f = h.dim(1)?;
+        Ok(h.reshape((b, n, f))?.max(1)?)
+    }
+
+    /// The scene feature of one cloud, (1, F).
+    ///
+    /// # Errors
+    /// [`VaeError::InvalidInput`] for an empty cloud or a coordinate that is not finite.
+    pub fn scene_feature(&self, points: &[[f32; 3]]) -> Result<Tensor> {
+        let cloud = self.coords(points, "scene cloud")?.unsqueeze(0)?;
+        Ok(self.features(&cloud)?.detach())
+    }
+
+    /// `feature` (B, F) repeated `k` times per row, (B * k, F).
+    fn repeat(feature: &Tensor, k: usize) -> Result<Tensor> {
+        let (b, f) = feature.dims2()?;
+        Ok(feature
+            .unsqueeze(1)?
+            .broadcast_as((b, k, f))?
+            .contiguous()?
+            .reshape((b * k, f))?)
+    }
+
+    /// The encoder on (B * k, F) repeated features and (B * k, 3) normalised torsos: mean and
+    /// log variance, each (B * k, latent); the log variance is clamped to [-12, 8].
+    fn encode_with(&self, feature: &Tensor, torsos: &Tensor) -> Result<(Tensor, Tensor)> {
+        let out = mlp(
+            &self.encoder,
+            &self.encoder_out,
+            &Tensor::cat(&[feature, torsos], 1)?,
+        )?;
+        let l = self.config.latent;
+        let mean = out.narrow(1, 0, l)?;
+        let log_var = out.narrow(1, l, l)?.clamp(-12f32, 8f32)?;
+        Ok((mean, log_var))
+    }
+
+    /// The decoder on (n, latent) codes and (n, F) features: (n, 3) normalised torsos.
+    fn decode_with(&self, z: &Tensor, feature: &Tensor) -> Result<Tensor> {
+        mlp(
+            &self.decoder,
+            &self.decoder_out,
+            &Tensor::cat(&[z, feature], 1)?,
+        )
+    }
+
+    /// The encoder: for each of `torsos` in the scene of `points`, the mean and log variance
+    /// of its latent Gaussian, each `(torsos.len(), latent)`.
+    ///
+    /// # Errors
+    /// [`VaeError::InvalidInput`] for an empty cloud, no torsos or a coordinate that is not
+    /// finite.
+    pub fn encode(&self, points: &[[f32; 3]], torsos: &[[f32; 3]]) -> Result<(Tensor, Tensor)> {
+        let feature = self.scene_feature(points)?;
+        let t = self.coords(torsos, "torso locations")?;
+        let (mean, log_var) = self.encode_with(&Self::repeat(&feature, torsos.len())?, &t)?;
+        Ok((mean.detach(), log_var.detach()))
+    }
+
+    /// The decoder: a torso location (metres) for each row of `z` (n, latent) in the scene of
+    /// `points`.
+    ///
+    /// # Errors
+    /// [`VaeError::InvalidInput`] for an empty cloud, a bad coordinate or a `z` that is not
+    /// (n, latent).
+    pub fn decode(&self, points: &[[f32; 3]], z: &Tensor) -> Result<Vec<[f32; 3]>> {
+        let feature = self.scene_feature(points)?;
+        let (n, l) = z.dims2().map_err(|_| {
+            VaeError::InvalidInput(format!(
+                "z must be (n, {}), got {:?}",
+                self.config.latent,
+                z.dims()
+            ))
+        })?;
+        if l != self.config.latent || n == 0 {
+            return Err(VaeError::InvalidInput(format!(
+                "z must be (n >= 1, {}), got {:?}",
+                self.config.latent,
+                z.dims()
+            )));
+        }
+        let out = self.decode_with(z, &Self::repeat(&feature, n)?)?;
+        self.to_metres(&out)
+    }
+
+    /// `n` torso locations drawn for the scene of `points`: codes from the standard normal
+    /// (seeded), decoded.
+    ///
+    /// # Errors
+    /// As [`Cvae::decode`]; `n` of 0 or above 10 million.
+    pub fn sample(&self, points: &[[f32; 3]], n: usize, seed: u64) -> Result<Vec<[f32; 3]>> {
+        if n == 0 || n > 10_000_000 {
+            return Err(VaeError::InvalidInput(format!(
+                "samples: 1 to 10,000,000 (got {n})"
+            )));
+        }
+        let z = normals(n * self.config.latent, seed);
+        let z = Tensor::from_vec(z, (n, self.config.latent), &self.device)?;
+        self.decode(points, &z)
+    }
+
+    /// (n, 3) normalised coordinates back to metres.
+    fn to_metres(&self, t: &Tensor) -> Result<Vec<[f32; 3]>> {
+        let (o, s) = (self.config.coord_offset, self.config.coord_scale);
+        Ok(t.flatten_all()?
+            .to_vec1::<f32>()?
+            .chunks_exact(3)
+            .map(|c| [c[0] * s + o[0], c[1] * s + o[1], c[2] * s + o[2]])
+            .collect())
+    }
+
+    /// The training loss on a batch: `clouds` (B, N, 3) and `torsos` (B * k, 3), normalised,
+    /// with standard-normal noise `eps` (B * k, latent). Reconstruction: squared error over
+    /// `2 sigma^2` (sigma in normalised units), summed over xyz; KL to the standard normal,
+    /// summed over the latent; both averaged over the torsos.
+    pub(crate) fn loss(
+        &self,
+        clouds: &Tensor,
+        torsos: &Tensor,
+        eps: &Tensor,
+        kl_weight: f64,
+        sigma: f32,
+    ) -> Result<Loss> {
+        let b = clouds.dim(0)?;
+        let k = torsos.dim(0)? / b;
+        let feature = Self::repeat(&self.features(clouds)?, k)?;
+        let (mean, log_var) = self.encode_with(&feature, torsos)?;
+        let z = (&mean + ((&log_var * 0.5)?.exp()? * eps)?)?;
+        let recon_xyz = self.decode_with(&z, &feature)?;
+        let n = (b * k) as f64;
+        let recon = ((recon_xyz - torsos)?.sqr()?.sum_all()? / (2.0 * (sigma * sigma) as f64 * n))?;
+        let kl = (((mean.sqr()? + log_var.exp()?)? - &log_var)? - 1.0)?;
+        let kl = (kl.sum_all()? * (0.5 / n))?;
+        let total = (&recon + (&kl * kl_weight)?)?;
+        Ok(Loss {
+            total,
+            recon: recon.to_scalar::<f32>()?,
+            kl: kl.to_scalar::<f32>()?,
+        })
+    }
+
+    /// The weights as named tensors and the file's metadata (format and config).
+    pub(crate) fn named(&self) -> Result<Named> {
+        let tensors = self
+            .store
+            .names()
+            .iter()
+            .cloned()
+            .zip(self.store.vars().iter().map(|v| v.as_tensor().clone()))
+            .collect();
+        let mut meta = HashMap::new();
+        meta.insert(META_FORMAT.to_string(), FORMAT.to_string());
+        meta.insert(
+            META_CONFIG.to_string(),
+            serde_json::to_string(&self.config)
+                .map_err(|e| VaeError::InvalidInput(format!("cannot serialise the config: {e}")))?,
+        );
+        Ok((tensors, meta))
+    }
+
+    /// Saves the weights and config as safetensors, atomically (a temporary file, then a
+    /// rename).
+    ///
+    /// # Errors
+    /// I/O errors, naming the file.
+    pub fn save(&self, path: impl AsRef<Path>) -> Result<()> {
+        let (tensors, meta) = self.named()?;
+        let bytes = to_safetensors(&tensors, meta)?;
+        envfield_grid::write_atomic(path.as_ref(), &bytes)?;
+        Ok(())
+    }
+
+    /// Loads a VAE saved by [`Cvae::save`] (or a training checkpoint), rebuilding it from the
+    /// config in the file and checking every tensor's name and shape.
+    ///
+    /// # Errors
+    /// [`VaeError::Checkpoint`] for a file that is not an envfield-vae file (for example a
+    /// field network's) or whose config is bad; a missing or misshapen tensor.
+    pub fn load(path: impl AsRef<Path>) -> Result<Self> {
+        let path = path.as_ref();
+        let mut file = TensorFile::read_format(path, FORMAT)?;
+        Self::from_file(path, &mut file)
+    }
+
+    pub(crate) fn from_file(path: &Path, file: &mut TensorFile) -> Result<Self> {
+        let bad = |reason: String| VaeError::Checkpoint {
+            path: path.to_path_buf(),
+            reason,
+        };
+        let config: VaeConfig = serde_json::from_str(
+            file.metadata
+                .get(META_CONFIG)
+                .ok_or_else(|| bad("no config in the metadata".into()))?,
+        )
+        .map_err(|e| bad(format!("bad config: {e}")))?;
+        config
+            .validate()
+            .map_err(|e| bad(format!("bad config: {e}")))?;
+        let vae = Self::new(config, 0)?;
+        for (name, var) in vae.store.names().iter().zip(vae.store.vars()) {
+            let t = file.take(path, name, var.dims(), &vae.device)?;
+            var.set(&t)?;
+        }
+        Ok(vae)
+    }
+}
+
+/// `n` standard-normal draws (Box-Muller) from `seed`.
+pub(crate) fn normals(n: usize, seed: u64) -> Vec<f32> {
+    let mut rng = SplitMix64::new(seed ^ 0x5EED_0F2A);
+    let unit = |rng: &mut SplitMix64| ((rng.next_u64() >> 11) as f64 + 0.5) / (1u64 << 53) as f64;
+    (0..n)
+        .map(|_| {
+            let (u1, u2) = (unit(&mut rng), unit(&mut rng));
+            ((-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()) as f32
+        })
+        .collect()
+}

@@ -1,0 +1,493 @@
+//! The accessible region of a scene: torso samples filtered by what a torso can afford,
+//! voxelised into one connected set, with the coverage figures that judge it.
+//!
+//! **The filter.** The paper drops samples whose bird's-eye projection falls on furniture or
+//! walls; taken literally, that also drops a torso sitting on a sofa. Here a sample is kept
+//! when
+//! 1. a sphere of [`RegionConfig::torso_radius`] around it is clear of geometry (its signed
+//!    distance is at least the radius), and
+//! 2. some pose is *supported* with its torso there: the standing pose (feet on a surface), the
+//!    seated pose or the lying pose, each tried at [`RegionConfig::yaws`] headings.
+//!
+//! Whether a kept sample *affords* a pose, i.e. some pose there is supported and free of
+//! collisions (the check of `envfield_affordance::check_pose`), is the quality figure: the
+//! filter does not ask for it.
+
+use crate::data::seat_torsos;
+use crate::{Result, VaeError};
+use envfield_affordance::{
+    check_pose, lie_down, sit_down, standing_pose, AffordanceConfig, LieConfig, Pose, SitConfig,
+    Support,
+};
+use envfield_grid::{Cell3, Field2, Grid3, HeatMapStyle};
+use envfield_scene::nalgebra::{Point3, Vector3};
+use envfield_scene::{Room, Scene, VoxelFrame};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// How samples are filtered and voxelised.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RegionConfig {
+    /// Radius of the torso sphere that must be clear of geometry, metres. Small, since the
+    /// pelvis joint of a seated body sits 5-10 cm above the seat.
+    pub torso_radius: f32,
+    /// Headings tried for each pose.
+    pub yaws: usize,
+    /// Voxel side of the region, metres.
+    pub voxel: f32,
+    /// The support and collision tolerances.
+    pub affordance: AffordanceConfig,
+}
+
+impl Default for RegionConfig {
+    fn default() -> Self {
+        Self {
+            torso_radius: 0.05,
+            yaws: 8,
+            voxel: 0.1,
+            affordance: AffordanceConfig::default(),
+        }
+    }
+}
+
+impl RegionConfig {
+    fn validate(&self) -> Result<()> {
+        let ok = self.torso_radius.is_finite()
+            && self.torso_radius >= 0.0
+            && (1..=360).contains(&self.yaws)
+            && self.voxel.is_finite()
+            && self.voxel >= 0.02;
+        if ok {
+            Ok(())
+        } else {
+            Err(VaeError::InvalidConfig(format!(
+                "region: torso_radius >= 0, 1 to 360 yaws and a voxel of at least 2 cm (got {self:?})"
+            )))
+        }
+    }
+}
+
+/// The poses a sample is tried with, each with its torso at the origin's x and y.
+#[derive(Clone, Debug)]
+struct Kit {
+    standing: Pose,
+    sitting: Pose,
+    lying: Pose,
+}
+
+impl Kit {
+    fn new() -> Result<Self> {
+        let centre = |p: Pose| {
+            let t = p.torso();
+            p.translated(&Vector3::new(-t.x, -t.y, -t.z))
+        };
+        let sit = sit_down(&SitConfig::default())?;
+        let lie = lie_down(&LieConfig::default())?;
+        Ok(Self {
+            standing: centre(standing_pose()),
+            sitting: centre(*sit.frames.last().expect("frames")),
+            lying: centre(*lie.frames.last().expect("frames")),
+        })
+    }
+}
+
+/// What a torso location affords.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Afford {
+    /// The torso sphere is clear of geometry.
+    pub clear: bool,
+    /// The first pose found supported there (standing, sitting, lying in that order).
+    pub supported: Option<Support>,
+    /// The first pose found supported and collision-free there.
+    pub valid: Option<Support>,
+}
+
+impl Afford {
+    /// Kept by the filter: clear and some pose supported.
+    pub fn kept(&self) -> bool {
+        self.clear && self.supported.is_some()
+    }
+}
+
+/// What the torso location `p` affords in `scene` (see the module's filter).
+///
+/// # Errors
+/// [`VaeError::InvalidInput`] for a coordinate that is not finite.
+pub fn afford(scene: &Scene, p: [f32; 3], config: &RegionConfig) -> Result<Afford> {
+    config.validate()?;
+    afford_with(scene, p, config, &Kit::new()?)
+}
+
+fn afford_with(scene: &Scene, p: [f32; 3], config: &RegionConfig, kit: &Kit) -> Result<Afford> {
+    if !p.iter().all(|v| v.is_finite()) {
+        return Err(VaeError::InvalidInput(format!(
+            "torso location {p:?} is not finite"
+        )));
+    }
+    let at = Point3::new(p[0], p[1], p[2]);
+    let clear = scene.signed_distance(&at)? >= config.torso_radius;
+    let mut out = Afford {
+        clear,
+        supported: None,
+        valid: None,
+    };
+    let to = at.coords;
+    let tries = [
+        (kit.standing, Support::Standing),
+        (kit.sitting, Support::Sitting),
+        (kit.lying, Support::Lying),
+    ]
+    .into_iter()
+    .flat_map(|(pose, s)| {
+        (0..config.yaws).map(move |k| {
+            (
+                pose,
+                s,
+                k as f32 * std::f32::consts::TAU / config.yaws as f32,
+            )
+        })
+    });
+    for (pose, support, yaw) in tries {
+        let placed = pose.rotated_about_z(yaw, &Point3::origin()).translated(&to);
+        let r = check_pose(scene, &placed, support, &config.affordance)?;
+        if r.supported && out.supported.is_none() {
+            out.supported = Some(support);
+        }
+        if r.valid() {
+            out.valid = Some(support);
+            break;
+        }
+    }
+    Ok(out)
+}
+
+/// What each of `samples` affords, in parallel.
+///
+/// # Errors
+/// As [`afford`], naming the sample.
+pub fn afford_all(
+    scene: &Scene,
+    samples: &[[f32; 3]],
+    config: &RegionConfig,
+) -> Result<Vec<Afford>> {
+    config.validate()?;
+    let kit = Kit::new()?;
+    samples
+        .par_iter()
+        .enumerate()
+        .map(|(i, &p)| {
+            afford_with(scene, p, config, &kit).map_err(|e| match e {
+                VaeError::InvalidInput(m) => VaeError::InvalidInput(format!("sample {i}: {m}")),
+                other => other,
+            })
+        })
+        .collect()
+}
+
+/// The accessible region of a scene: the voxels holding kept torso samples (and their six
+/// neighbours, closing the gaps between samples), reduced to its largest 26-connected set.
+#[derive(Clone, Debug)]
+pub struct AccessibleRegion {
+    /// The voxel lattice, metres.
+    pub frame: VoxelFrame,
+    /// Free voxels are accessible.
+    pub grid: Grid3,
+    /// The kept samples, metres.
+    pub samples: Vec<[f32; 3]>,
+    /// Connected sets before the largest was kept.
+    pub components: usize,
+}
+
+impl AccessibleRegion {
+    /// The region of `kept` samples (already filtered) on a lattice covering `scene`.
+    ///
+    /// # Errors
+    /// [`VaeError::InvalidInput`] for no samples (a scene with no floor keeps none) or an
+    /// empty scene.
+    pub fn from_samples(scene: &Scene, kept: Vec<[f32; 3]>, voxel: f32) -> Result<Self> {
+        if kept.is_empty() {
+            return Err(VaeError::InvalidInput(
+                "no torso sample affords a pose here: the scene has no floor or seat the \
+                 samples reach"
+                    .into(),
+            ));
+        }
+        let aabb = scene
+            .aabb()
+            .ok_or_else(|| VaeError::InvalidInput("the scene is empty".into()))?;
+        let frame = VoxelFrame::covering(aabb, voxel)?;
+        let [nx, ny, nz] = frame.shape;
+        let mut on = vec![false; nx * ny * nz];
+        let index = |c: Cell3| (c.x * ny + c.y) * nz + c.z;
+        for p in &kept {
+            if let Some(c) = frame.cell_of(&Point3::new(p[0], p[1], p[2])) {
+                on[index(c)] = true;
+                for (dx, dy, dz) in [
+                    (1, 0, 0),
+                    (-1, 0, 0),
+                    (0, 1, 0),
+                    (0, -1, 0),
+                    (0, 0, 1),
+                    (0, 0, -1),
+                ] {
+                    let (x, y, z) = (c.x as isize + dx, c.y as isize + dy, c.z as isize + dz);
+                    if x >= 0
+                        && y >= 0
+                        && z >= 0
+                        && (x as usize) < nx
+                        && (y as usize) < ny
+                        && (z as usize) < nz
+                    {
+                        on[index(Cell3::new(x as usize, y as usize, z as usize))] = true;
+                    }
+                }
+            }
+        }
+        // The largest 26-connected set.
+        let mut label = vec![usize::MAX; on.len()];
+        let mut sizes = Vec::new();
+        for start in 0..on.len() {
+            if !on[start] || label[start] != usize::MAX {
+                continue;
+            }
+            let id = sizes.len();
+            let mut stack = vec![start];
+            label[start] = id;
+            let mut size = 0usize;
+            while let Some(i) = stack.pop() {
+                size += 1;
+                let (x, y, z) = (i / (ny * nz), (i / nz) % ny, i % nz);
+                for dx in -1isize..=1 {
+                    for dy in -1isize..=1 {
+                        for dz in -1isize..=1 {
+                            let (a, b, c) = (x as isize + dx, y as isize + dy, z as isize + dz);
+                            if a < 0
+                                || b < 0
+                                || c < 0
+                                || a as usize >= nx
+                                || b as usize >= ny
+                                || c as usize >= nz
+                            {
+                                continue;
+                            }
+                            let j = index(Cell3::new(a as usize, b as usize, c as usize));
+                            if on[j] && label[j] == usize::MAX {
+                                label[j] = id;
+                                stack.push(j);
+                            }
+                        }
+                    }
+                }
+            }
+            sizes.push(size);
+        }
+        let largest = (0..sizes.len()).max_by_key(|&k| sizes[k]).unwrap_or(0);
+        let obstacles = label.iter().map(|&l| l != largest).collect();
+        let grid = Grid3::from_obstacles(frame.shape, obstacles)?;
+        if grid.free_count() == 0 {
+            return Err(VaeError::InvalidInput(
+                "the kept samples all lie outside the scene's box".into(),
+            ));
+        }
+        Ok(Self {
+            frame,
+            grid,
+            samples: kept,
+            components: sizes.len(),
+        })
+    }
+
+    /// Whether `p` (metres) lies in an accessible voxel.
+    pub fn contains(&self, p: [f32; 3]) -> bool {
+        self.frame
+            .cell_of(&Point3::new(p[0], p[1], p[2]))
+            .is_some_and(|c| self.grid.is_free(c))
+    }
+
+    /// The accessible voxels' centres, metres.
+    pub fn voxel_centres(&self) -> Vec<[f32; 3]> {
+        let [nx, ny, nz] = self.frame.shape;
+        (0..nx * ny * nz)
+            .filter(|&i| !self.grid.obstacles()[i])
+            .map(|i| {
+                let c = self
+                    .frame
+                    .center(Cell3::new(i / (ny * nz), (i / nz) % ny, i % nz));
+                [c.x, c.y, c.z]
+            })
+            .collect()
+    }
+
+    /// Writes the accessible voxels' centres as an ASCII PLY point cloud coloured by height
+    /// (blue low, yellow high), atomically.
+    ///
+    /// # Errors
+    /// I/O errors, naming the file.
+    pub fn write_ply(&self, path: impl AsRef<Path>) -> Result<()> {
+        let points = self.voxel_centres();
+        let (lo, hi) = points
+            .iter()
+            .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), p| {
+                (a.min(p[2]), b.max(p[2]))
+            });
+        let mut text = format!(
+            "ply\nformat ascii 1.0\ncomment envfield accessible region, coloured by height\n\
+             element vertex {}\nproperty float x\nproperty float y\nproperty float z\n\
+             property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n",
+            points.len()
+        );
+        for p in &points {
+            let t = if hi > lo {
+                (p[2] - lo) / (hi - lo)
+            } else {
+                0.0
+            };
+            let [r, g, b] = height_colour(t);
+            text.push_str(&format!("{} {} {} {r} {g} {b}\n", p[0], p[1], p[2]));
+        }
+        envfield_grid::write_atomic(path.as_ref(), text.as_bytes())?;
+        Ok(())
+    }
+
+    /// Writes a top-down PNG: each floor column coloured by the height of its highest
+    /// accessible voxel (grey: none), north up, `scale` pixels per voxel.
+    ///
+    /// # Errors
+    /// I/O errors, naming the file.
+    pub fn write_png(&self, path: impl AsRef<Path>, scale: u32) -> Result<()> {
+        let [nx, ny, nz] = self.frame.shape;
+        let mut values = vec![f32::INFINITY; nx * ny];
+        for x in 0..nx {
+            for y in 0..ny {
+                if let Some(z) = (0..nz)
+                    .rev()
+                    .find(|&z| self.grid.is_free(Cell3::new(x, y, z)))
+                {
+                    let h = self.frame.center(Cell3::new(x, y, z)).z;
+                    values[(ny - 1 - y) * nx + x] = h;
+                }
+            }
+        }
+        let field = Field2::new(ny, nx, values)?;
+        field.write_png(
+            path,
+            &HeatMapStyle {
+                scale: scale.max(1),
+                ..HeatMapStyle::default()
+            },
+        )?;
+        Ok(())
+    }
+
+    /// The voxel of `p` when it is accessible.
+    ///
+    /// # Errors
+    /// [`VaeError::InvalidInput`] naming `what` for a point outside the region.
+    pub fn cell(&self, p: [f32; 3], what: &str) -> Result<Cell3> {
+        match self.frame.cell_of(&Point3::new(p[0], p[1], p[2])) {
+            Some(c) if self.grid.is_free(c) => Ok(c),
+            _ => Err(VaeError::InvalidInput(format!(
+                "{what} {p:?} is outside the accessible region"
+            ))),
+        }
+    }
+}
+
+/// Blue to yellow through green, `t` in [0, 1].
+fn height_colour(t: f32) -> [u8; 3] {
+    let t = t.clamp(0.0, 1.0);
+    let c = |a: f32, b: f32| ((a + (b - a) * t) * 255.0) as u8;
+    [c(0.2, 1.0), c(0.2, 0.9), c(0.9, 0.1)]
+}
+
+/// The share (percent) of `targets` within `radius` of some point of `samples`; 100 for no
+/// targets.
+pub fn covered_pct(targets: &[[f32; 3]], samples: &[[f32; 3]], radius: f32) -> f64 {
+    if targets.is_empty() {
+        return 100.0;
+    }
+    let r2 = radius * radius;
+    let hit = targets
+        .par_iter()
+        .filter(|t| {
+            samples.iter().any(|s| {
+                let d = [s[0] - t[0], s[1] - t[1], s[2] - t[2]];
+                d[0] * d[0] + d[1] * d[1] + d[2] * d[2] <= r2
+            })
+        })
+        .count();
+    100.0 * hit as f64 / targets.len() as f64
+}
+
+/// How well a set of torso samples serves a generated room.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RegionQuality {
+    /// Samples drawn.
+    pub drawn: usize,
+    /// Samples kept by the filter, percent of those drawn.
+    pub kept_pct: f64,
+    /// Kept samples where some pose is supported and collision-free, percent of those kept.
+    pub affordable_pct: f64,
+    /// Standing-affordable floor points (10 cm grid) within 0.2 m of a kept sample, percent.
+    pub floor_coverage_pct: f64,
+    /// Seats whose sitting torso location lies within 0.15 m of a kept sample, percent.
+    pub seat_coverage_pct: f64,
+    /// Seats in the room.
+    pub seats: usize,
+}
+
+/// Judges `samples` drawn for `room`: the filter's figures, floor coverage and seat coverage.
+///
+/// # Errors
+/// As [`afford_all`]; [`VaeError::InvalidInput`] for a room with no standing-affordable floor.
+pub fn region_quality(
+    room: &Room,
+    samples: &[[f32; 3]],
+    config: &RegionConfig,
+) -> Result<RegionQuality> {
+    let affords = afford_all(&room.scene, samples, config)?;
+    let kept: Vec<[f32; 3]> = samples
+        .iter()
+        .zip(&affords)
+        .filter(|(_, a)| a.kept())
+        .map(|(s, _)| *s)
+        .collect();
+    let affordable = affords
+        .iter()
+        .filter(|a| a.kept() && a.valid.is_some())
+        .count();
+    let floor = crate::standing_floor(&room.scene, [0.0, 0.0, room.size[0], room.size[1]], 0.1)?;
+    if floor.is_empty() {
+        return Err(VaeError::InvalidInput(
+            "the room has no floor a standing pose is supported on".into(),
+        ));
+    }
+    let seats = seat_torsos(room)?;
+    Ok(RegionQuality {
+        drawn: samples.len(),
+        kept_pct: 100.0 * kept.len() as f64 / samples.len().max(1) as f64,
+        affordable_pct: if kept.is_empty() {
+            0.0
+        } else {
+            100.0 * affordable as f64 / kept.len() as f64
+        },
+        floor_coverage_pct: covered_pct(&floor, &kept, 0.2),
+        seat_coverage_pct: covered_pct(&seats, &kept, 0.15),
+        seats: seats.len(),
+    })
+}
+
+/// Uniform samples in the room's box (interior, floor to wall top): the no-learning control.
+pub fn uniform_in_room(room: &Room, height: f32, n: usize, seed: u64) -> Vec<[f32; 3]> {
+    let mut rng = envfield_grid::SplitMix64::new(seed ^ 0x0F1F);
+    (0..n)
+        .map(|_| {
+            [
+                rng.next_f32() * room.size[0],
+                rng.next_f32() * room.size[1],
+                rng.next_f32() * height,
+            ]
+        })
+        .collect()
+}

@@ -1,0 +1,267 @@
+//! [`VaeTrainer`]: Adam on reconstruction plus cyclically annealed KL, seeded batches from
+//! [`RoomTorsos`], atomic checkpoints that resume exactly.
+
+use crate::model::{normals, FORMAT};
+use crate::{Cvae, Result, RoomTorsos, TorsoSource, VaeError, VaeTrainConfig};
+use candle_core::Tensor;
+use envfield_grid::SplitMix64;
+use envfield_nets::params::{to_safetensors, AdamW, TensorFile, META_STEP};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+use std::time::Instant;
+
+/// The metadata key of a checkpoint's training config.
+const META_TRAIN: &str = "envfield.vae_train";
+
+/// After each step: where training stands.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct VaeProgress {
+    /// Steps done.
+    pub step: u64,
+    /// Steps in the run.
+    pub steps: u64,
+    /// This step's loss (reconstruction + weighted KL).
+    pub loss: f32,
+    /// Its reconstruction part.
+    pub recon: f32,
+    /// Its KL part (unweighted).
+    pub kl: f32,
+    /// The KL weight of this step.
+    pub kl_weight: f64,
+    /// Whether a checkpoint was written after it.
+    pub checkpointed: bool,
+    /// Seconds since the run started.
+    pub seconds: f64,
+}
+
+/// Trains a [`Cvae`].
+#[derive(Debug)]
+pub struct VaeTrainer {
+    vae: Cvae,
+    optimiser: AdamW,
+    config: VaeTrainConfig,
+}
+
+impl VaeTrainer {
+    /// A trainer for `vae` at step 0 (Adam: betas 0.9 and 0.999, no weight decay).
+    ///
+    /// # Errors
+    /// [`VaeError::InvalidConfig`] for a bad config.
+    pub fn new(vae: Cvae, config: VaeTrainConfig) -> Result<Self> {
+        config.validate()?;
+        let optimiser = AdamW::new(vae.vars(), config.lr, (0.9, 0.999), 1e-8, 0.0)?;
+        Ok(Self {
+            vae,
+            optimiser,
+            config,
+        })
+    }
+
+    /// Steps done so far.
+    pub fn step(&self) -> u64 {
+        self.optimiser.step
+    }
+
+    /// The VAE.
+    pub fn vae(&self) -> &Cvae {
+        &self.vae
+    }
+
+    /// The training config.
+    pub fn config(&self) -> &VaeTrainConfig {
+        &self.config
+    }
+
+    /// Lengthens (or shortens) the run: the KL schedule's cycles stretch with it.
+    pub fn set_steps(&mut self, steps: u64) {
+        self.config.steps = steps;
+    }
+
+    /// The batch of `step`: `scenes_per_step` rooms drawn with replacement, each cloud cut to
+    /// the config's point count (a random subset), and `torsos_per_scene` torso locations per
+    /// room with replacement, plus the reparameterisation noise; all from `(seed, step)`, so
+    /// a resumed run draws what the uninterrupted one would have.
+    fn batch(&self, data: &[RoomTorsos], step: u64) -> Result<(Tensor, Tensor, Tensor)> {
+        let mut rng = SplitMix64::new(self.config.seed ^ step.wrapping_mul(0x9E37_79B9_7F4A_7C15));
+        let (b, k, n) = (
+            self.config.scenes_per_step,
+            self.config.torsos_per_scene,
+            self.vae.config().points,
+        );
+        let (mut cloud, mut torsos) = (Vec::with_capacity(b * n), Vec::with_capacity(b * k));
+        let kinds = [
+            TorsoSource::Walk,
+            TorsoSource::Sit,
+            TorsoSource::Lie,
+            TorsoSource::Stand,
+        ];
+        for _ in 0..b {
+            let room = &data[rng.below(data.len())];
+            for _ in 0..n {
+                cloud.push(room.cloud[rng.below(room.cloud.len())]);
+            }
+            // The room's torsos by kind, and the kinds' weights among those it has.
+            let by_kind: Vec<Vec<usize>> = kinds
+                .iter()
+                .map(|&s| {
+                    (0..room.torsos.len())
+                        .filter(|&i| room.sources[i] == s)
+                        .collect()
+                })
+                .collect();
+            let weights: Vec<f32> = (0..4)
+                .map(|j| match by_kind[j].is_empty() {
+                    true => 0.0,
+                    false => self.config.source_weights[j],
+                })
+                .collect();
+            let total: f32 = weights.iter().sum();
+            for _ in 0..k {
+                let i = if total > 0.0 {
+                    let mut u = rng.next_f32() * total;
+                    let j = (0..4)
+                        .find(|&j| {
+                            u -= weights[j];
+                            u < 0.0 && weights[j] > 0.0
+                        })
+                        .unwrap_or_else(|| (0..4).rfind(|&j| weights[j] > 0.0).unwrap_or(0));
+                    by_kind[j][rng.below(by_kind[j].len())]
+                } else {
+                    rng.below(room.torsos.len())
+                };
+                torsos.push(room.torsos[i]);
+            }
+        }
+        let cloud = self
+            .vae
+            .coords(&cloud, "training clouds")?
+            .reshape((b, n, 3))?;
+        let torsos = self.vae.coords(&torsos, "training torsos")?;
+        let latent = self.vae.config().latent;
+        let eps = Tensor::from_vec(
+            normals(b * k * latent, rng.next_u64()),
+            (b * k, latent),
+            self.vae.device(),
+        )?;
+        Ok((cloud, torsos, eps))
+    }
+
+    /// Trains until the config's `steps` (from the current step) on `data`, checkpointing to
+    /// `checkpoint`, calling `on_progress` after every step (returning `false` stops, with a
+    /// checkpoint). Returns the last step's progress.
+    ///
+    /// # Errors
+    /// [`VaeError::InvalidInput`] for no rooms, or a room without cloud or torsos;
+    /// [`VaeError::Diverged`]; I/O errors of the checkpoint.
+    pub fn run(
+        &mut self,
+        data: &[RoomTorsos],
+        checkpoint: Option<&Path>,
+        mut on_progress: impl FnMut(&VaeProgress) -> bool,
+    ) -> Result<Option<VaeProgress>> {
+        if data.is_empty() {
+            return Err(VaeError::InvalidInput("no training rooms".into()));
+        }
+        if let Some(i) = data.iter().position(|r| {
+            r.cloud.is_empty() || r.torsos.is_empty() || r.sources.len() != r.torsos.len()
+        }) {
+            return Err(VaeError::InvalidInput(format!(
+                "training room {i} has no surface points, no torso locations, or not one \
+                 source per torso location"
+            )));
+        }
+        let start = Instant::now();
+        let mut last = None;
+        while self.step() < self.config.steps {
+            let step = self.step();
+            let (cloud, torsos, eps) = self.batch(data, step)?;
+            let kl_weight = self.config.kl_weight(step);
+            let sigma = self.config.recon_sigma / self.vae.config().coord_scale;
+            let loss = self.vae.loss(&cloud, &torsos, &eps, kl_weight, sigma)?;
+            let value = loss.total.to_scalar::<f32>()?;
+            if !value.is_finite() {
+                return Err(VaeError::Diverged { step, loss: value });
+            }
+            self.optimiser.backward_step(self.vae.vars(), &loss.total)?;
+            let done = self.step();
+            let every = self.config.checkpoint_every;
+            let due = done >= self.config.steps || (every > 0 && done % every == 0);
+            let checkpointed = match checkpoint {
+                Some(p) if due => {
+                    self.save_checkpoint(p)?;
+                    true
+                }
+                _ => false,
+            };
+            let progress = VaeProgress {
+                step: done,
+                steps: self.config.steps,
+                loss: value,
+                recon: loss.recon,
+                kl: loss.kl,
+                kl_weight,
+                checkpointed,
+                seconds: start.elapsed().as_secs_f64(),
+            };
+            let go_on = on_progress(&progress);
+            last = Some(progress);
+            if !go_on {
+                if let (Some(p), false) = (checkpoint, checkpointed) {
+                    self.save_checkpoint(p)?;
+                }
+                break;
+            }
+        }
+        Ok(last)
+    }
+
+    /// Writes the weights, Adam's moments, the step and the training config, atomically. A
+    /// checkpoint loads as a VAE too ([`Cvae::load`]).
+    ///
+    /// # Errors
+    /// I/O errors, naming the file.
+    pub fn save_checkpoint(&self, path: impl AsRef<Path>) -> Result<()> {
+        let (mut tensors, mut meta) = self.vae.named()?;
+        tensors.extend(self.optimiser.state_tensors(self.vae.store().names()));
+        meta.insert(META_STEP.to_string(), self.step().to_string());
+        meta.insert(
+            META_TRAIN.to_string(),
+            serde_json::to_string(&self.config)
+                .map_err(|e| VaeError::InvalidInput(format!("cannot serialise the config: {e}")))?,
+        );
+        envfield_grid::write_atomic(path.as_ref(), &to_safetensors(&tensors, meta)?)?;
+        Ok(())
+    }
+
+    /// Resumes from a checkpoint written by [`VaeTrainer::save_checkpoint`]: the same weights,
+    /// moments, step and config, so the run goes on exactly as if it had not stopped.
+    ///
+    /// # Errors
+    /// [`VaeError::Checkpoint`] for a weight file without training state, or a file that does
+    /// not fit.
+    pub fn resume(path: impl AsRef<Path>) -> Result<Self> {
+        let path = path.as_ref();
+        let mut file = TensorFile::read_format(path, FORMAT)?;
+        let bad = |reason: String| VaeError::Checkpoint {
+            path: path.to_path_buf(),
+            reason,
+        };
+        let step: u64 = file
+            .metadata
+            .get(META_STEP)
+            .ok_or_else(|| bad("no step: a weight file, not a training checkpoint".into()))?
+            .parse()
+            .map_err(|e| bad(format!("bad step: {e}")))?;
+        let config: VaeTrainConfig = serde_json::from_str(
+            file.metadata
+                .get(META_TRAIN)
+                .ok_or_else(|| bad("no training config".into()))?,
+        )
+        .map_err(|e| bad(format!("bad training config: {e}")))?;
+        let vae = Cvae::from_file(path, &mut file)?;
+        let (m, v) = file.take_moments(path, vae.store(), vae.device())?;
+        let mut trainer = Self::new(vae, config)?;
+        trainer.optimiser.set_moments(m, v, step);
+        Ok(trainer)
+    }
+}

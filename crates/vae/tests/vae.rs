@@ -1,0 +1,325 @@
+//! The VAE, its training and files, the accessible region and the 3D fields: behaviour checked
+//! against known answers, and bad input refused with a clear error.
+
+use envfield_grid::{Cell3, ContinuousField3, Grid3};
+use envfield_scene::{generate_room, RoomConfig, Scene, TriangleMesh, VoxelFrame};
+use envfield_vae::{
+    afford, room_torsos, AccessibleRegion, Cvae, ExactField3, Field3Config, LearnedField3,
+    RegionConfig, TorsoDataConfig, TorsoSource, VaeConfig, VaeError, VaeTrainConfig, VaeTrainer,
+};
+
+fn small() -> VaeConfig {
+    VaeConfig {
+        pointnet: vec![16, 32],
+        points: 64,
+        latent: 4,
+        hidden: 32,
+        layers: 2,
+        ..VaeConfig::default()
+    }
+}
+
+fn tmp(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("envfield-vae-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+fn cloud(n: usize, seed: u64) -> Vec<[f32; 3]> {
+    let mut rng = envfield_grid::SplitMix64::new(seed);
+    (0..n)
+        .map(|_| {
+            [
+                5.0 * rng.next_f32(),
+                4.0 * rng.next_f32(),
+                2.0 * rng.next_f32(),
+            ]
+        })
+        .collect()
+}
+
+/// The scene feature, and so every sample, does not depend on the order of the points.
+#[test]
+fn the_scene_feature_ignores_point_order() {
+    let vae = Cvae::new(small(), 3).unwrap();
+    let points = cloud(200, 1);
+    let mut reversed = points.clone();
+    reversed.reverse();
+    reversed.rotate_left(37);
+    let a = vae
+        .scene_feature(&points)
+        .unwrap()
+        .flatten_all()
+        .unwrap()
+        .to_vec1::<f32>()
+        .unwrap();
+    let b = vae
+        .scene_feature(&reversed)
+        .unwrap()
+        .flatten_all()
+        .unwrap()
+        .to_vec1::<f32>()
+        .unwrap();
+    assert_eq!(a, b);
+    assert_eq!(
+        vae.sample(&points, 10, 4).unwrap(),
+        vae.sample(&reversed, 10, 4).unwrap()
+    );
+    // Another cloud gives another feature.
+    let c = vae
+        .scene_feature(&cloud(200, 2))
+        .unwrap()
+        .flatten_all()
+        .unwrap()
+        .to_vec1::<f32>()
+        .unwrap();
+    assert_ne!(a, c);
+}
+
+/// The encoder gives one Gaussian per torso; the same seed gives the same samples.
+#[test]
+fn encode_decode_and_sample_have_their_shapes_and_are_seeded() {
+    let vae = Cvae::new(small(), 0).unwrap();
+    let points = cloud(64, 5);
+    let (mean, log_var) = vae
+        .encode(&points, &[[1.0, 1.0, 1.0], [2.0, 1.0, 0.5]])
+        .unwrap();
+    assert_eq!(mean.dims(), &[2, 4]);
+    assert_eq!(log_var.dims(), &[2, 4]);
+    let z = candle_core::Tensor::zeros((3, 4), candle_core::DType::F32, &candle_core::Device::Cpu)
+        .unwrap();
+    assert_eq!(vae.decode(&points, &z).unwrap().len(), 3);
+    assert_eq!(
+        vae.sample(&points, 7, 9).unwrap(),
+        vae.sample(&points, 7, 9).unwrap()
+    );
+    assert_ne!(
+        vae.sample(&points, 7, 9).unwrap(),
+        vae.sample(&points, 7, 10).unwrap()
+    );
+}
+
+/// Bad input is refused with an error naming it: an empty cloud, NaN coordinates, a code of
+/// the wrong width, no samples, a bad config.
+#[test]
+fn bad_input_is_refused() {
+    let vae = Cvae::new(small(), 0).unwrap();
+    let err = |r: Result<Vec<[f32; 3]>, VaeError>| r.unwrap_err().to_string();
+    assert!(err(vae.sample(&[], 3, 0)).contains("no points"));
+    let mut bad = cloud(10, 1);
+    bad[4][1] = f32::NAN;
+    assert!(err(vae.sample(&bad, 3, 0)).contains("point 4"));
+    assert!(vae
+        .encode(&cloud(10, 1), &[[0.0, f32::INFINITY, 0.0]])
+        .is_err());
+    let z = candle_core::Tensor::zeros((3, 5), candle_core::DType::F32, &candle_core::Device::Cpu)
+        .unwrap();
+    assert!(vae.decode(&cloud(10, 1), &z).is_err());
+    assert!(err(vae.sample(&cloud(10, 1), 0, 0)).contains("samples"));
+    let config = VaeConfig {
+        latent: 0,
+        ..small()
+    };
+    assert!(
+        matches!(Cvae::new(config, 0), Err(VaeError::InvalidConfig(m)) if m.contains("latent"))
+    );
+}
+
+/// A saved VAE loads with the same weights; a file of another kind is refused and names
+/// itself.
+#[test]
+fn files_round_trip_and_other_files_are_refused() {
+    let vae = Cvae::new(small(), 8).unwrap();
+    let path = tmp("vae.safetensors");
+    vae.save(&path).unwrap();
+    let loaded = Cvae::load(&path).unwrap();
+    let points = cloud(64, 2);
+    assert_eq!(
+        vae.sample(&points, 5, 1).unwrap(),
+        loaded.sample(&points, 5, 1).unwrap()
+    );
+    // A field network's file: another format.
+    let net = envfield_nets::FieldNet::new(
+        envfield_nets::ModelConfig::Context(envfield_nets::ContextConfig::default()),
+        0,
+    )
+    .unwrap();
+    let other = tmp("field.safetensors");
+    net.save(&other).unwrap();
+    let e = Cvae::load(&other).unwrap_err().to_string();
+    assert!(
+        e.contains("envfield-vae/1") && e.contains("field.safetensors"),
+        "{e}"
+    );
+    // A weight file is not a checkpoint.
+    assert!(VaeTrainer::resume(&path)
+        .unwrap_err()
+        .to_string()
+        .contains("not a training checkpoint"));
+    // A truncated file.
+    let bytes = std::fs::read(&path).unwrap();
+    std::fs::write(&path, &bytes[..bytes.len() / 2]).unwrap();
+    assert!(Cvae::load(&path).is_err());
+}
+
+/// Training lowers the loss, and a run stopped and resumed from its checkpoint ends with the
+/// same weights as one that never stopped.
+#[test]
+fn training_resumes_exactly() {
+    let room = generate_room(&RoomConfig::default(), 3).unwrap();
+    let data = vec![room_torsos(
+        &room,
+        &TorsoDataConfig {
+            walks: 1,
+            ..TorsoDataConfig::default()
+        },
+        3,
+    )
+    .unwrap()];
+    assert!(data[0].sources.contains(&TorsoSource::Stand));
+    let config = VaeTrainConfig {
+        lr: 1e-3,
+        steps: 40,
+        scenes_per_step: 2,
+        torsos_per_scene: 16,
+        checkpoint_every: 0,
+        ..VaeTrainConfig::default()
+    };
+    let mut whole = VaeTrainer::new(Cvae::new(small(), 1).unwrap(), config.clone()).unwrap();
+    let mut losses = Vec::new();
+    whole
+        .run(&data, None, |p| {
+            losses.push(p.recon);
+            true
+        })
+        .unwrap();
+    assert!(
+        losses[35..].iter().sum::<f32>() < losses[..5].iter().sum::<f32>(),
+        "{losses:?}"
+    );
+    let ckpt = tmp("vae.ckpt");
+    let mut first = VaeTrainer::new(Cvae::new(small(), 1).unwrap(), config).unwrap();
+    first.run(&data, Some(&ckpt), |p| p.step < 17).unwrap();
+    let mut resumed = VaeTrainer::resume(&ckpt).unwrap();
+    assert_eq!(resumed.step(), 17);
+    resumed.run(&data, None, |_| true).unwrap();
+    let points = cloud(64, 4);
+    assert_eq!(
+        whole.vae().sample(&points, 6, 2).unwrap(),
+        resumed.vae().sample(&points, 6, 2).unwrap()
+    );
+    assert!(
+        VaeTrainer::new(Cvae::new(small(), 1).unwrap(), whole.config().clone())
+            .unwrap()
+            .run(&[], None, |_| true)
+            .is_err()
+    );
+}
+
+/// A scene with no floor affords nothing: its region is refused with a clear error.
+#[test]
+fn a_scene_with_no_floor_has_no_accessible_region() {
+    // A cube floating 3 m up: no surface to stand or sit on near the samples.
+    let mut mesh = TriangleMesh::cube(1.0);
+    for v in &mut mesh.vertices {
+        v.z += 3.0;
+    }
+    let scene = Scene::from_mesh("cube", &mesh).unwrap();
+    let samples = [[0.0, 0.0, 1.0], [0.3, 0.2, 0.9], [-0.2, 0.1, 1.1]];
+    let config = RegionConfig::default();
+    let kept: Vec<_> = samples
+        .iter()
+        .filter(|&&s| afford(&scene, s, &config).unwrap().kept())
+        .copied()
+        .collect();
+    assert!(kept.is_empty());
+    let e = AccessibleRegion::from_samples(&scene, kept, 0.1)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("no floor"), "{e}");
+    assert!(afford(&scene, [f32::NAN, 0.0, 1.0], &config).is_err());
+}
+
+/// In a room, a torso at standing height over open floor is kept and affords standing; one
+/// inside a wall is not kept.
+#[test]
+fn the_filter_keeps_standing_torsos_and_drops_ones_in_walls() {
+    let room = generate_room(&RoomConfig::default(), 5).unwrap();
+    let data = room_torsos(&room, &TorsoDataConfig::default(), 5).unwrap();
+    let config = RegionConfig::default();
+    let standing = data
+        .torsos
+        .iter()
+        .zip(&data.sources)
+        .find(|(_, s)| **s == TorsoSource::Stand)
+        .map(|(t, _)| *t)
+        .unwrap();
+    let a = afford(&room.scene, standing, &config).unwrap();
+    assert!(a.kept() && a.valid.is_some(), "{a:?}");
+    let in_wall = [-0.05, room.size[1] / 2.0, 1.0];
+    assert!(!afford(&room.scene, in_wall, &config).unwrap().kept());
+}
+
+/// A region built by hand: an open 3 x 2 x 1 box of voxels.
+fn box_region(shape: [usize; 3], voxel: f32) -> AccessibleRegion {
+    let frame = VoxelFrame {
+        origin: envfield_scene::nalgebra::Point3::new(0.0, 0.0, 0.0),
+        voxel,
+        shape,
+    };
+    let grid = Grid3::new(shape[0], shape[1], shape[2]).unwrap();
+    AccessibleRegion {
+        frame,
+        grid,
+        samples: vec![[0.05, 0.05, 0.05]],
+        components: 1,
+    }
+}
+
+/// The exact field of an open box is the straight-line distance (fast marching, first order,
+/// within its known error), in metres; a goal outside the region is refused.
+#[test]
+fn the_exact_field_of_an_open_box_is_the_distance() {
+    let region = box_region([40, 30, 6], 0.1);
+    let field = ExactField3::at_cell(&region, Cell3::new(5, 5, 2)).unwrap();
+    let goal = region.frame.center(Cell3::new(5, 5, 2));
+    for c in [
+        Cell3::new(35, 5, 2),
+        Cell3::new(5, 25, 2),
+        Cell3::new(30, 20, 4),
+    ] {
+        let p = region.frame.center(c);
+        let d = ((p - goal).norm()) as f32;
+        let v = field.value([p.x, p.y, p.z]).unwrap();
+        assert!((v - d).abs() < 0.08 * d + 0.02, "{c:?}: {v} against {d}");
+    }
+    let g = field.gradient([2.0, 0.55, 0.25]).unwrap().unwrap();
+    assert!(g[0] > 0.9 && g[1].abs() < 0.2, "{g:?}");
+    assert!(ExactField3::new(&region, [10.0, 0.0, 0.0]).is_err());
+    assert!(field.value([f32::NAN, 0.0, 0.0]).is_err());
+}
+
+/// A short training of the learned field on a small box gets within a few voxels of the exact
+/// field on held-out goals; a network of another lattice is refused.
+#[test]
+fn the_learned_field_approaches_the_exact_one() {
+    let region = box_region([12, 10, 4], 0.1);
+    let config = Field3Config {
+        goals: 48,
+        held_out_goals: 4,
+        steps: 400,
+        goals_per_step: 8,
+        queries_per_goal: 64,
+        ..Field3Config::default()
+    };
+    let (net, report) = envfield_vae::train_field3(&region, &config, None, |_, _, _| {}).unwrap();
+    assert!(report.pairs > 100);
+    assert!(report.median_err_m < 0.15, "{report:?}");
+    let field = LearnedField3::new(&net, &region, Cell3::new(1, 1, 1)).unwrap();
+    let v = field
+        .values(&[[0.15, 0.15, 0.15], [1.05, 0.85, 0.15]])
+        .unwrap();
+    assert!(v[0] < v[1], "{v:?}");
+    let other = box_region([8, 8, 4], 0.1);
+    assert!(LearnedField3::new(&net, &other, Cell3::new(1, 1, 1)).is_err());
+}

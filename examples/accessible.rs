@@ -1,0 +1,331 @@
+//! Where people can be in a room: VAE samples of torso locations, the filter, the voxels of the
+//! accessible region, the exact 3D field over it and the learned one, to files a person opens.
+//!
+//! ```text
+//! cargo run --release --example accessible                         # one held-out room, out/accessible
+//! cargo run --release --example accessible -- --scene room.obj     # a scene of your own
+//! cargo run --release --example accessible -- --rooms 20 --json    # the figures on 20 held-out rooms
+//! ```
+//!
+//! Writes `scene.obj`, `samples.ply` (kept samples), `region.ply` (accessible voxels coloured
+//! by height), `region.png` (top-down, coloured by the highest accessible height),
+//! `field_exact.png` and `field_learned.png` (top-down, the field at each column's highest
+//! accessible voxel, for one goal) and `summary.json`. `--rooms N` evaluates N generated
+//! rooms of seeds 10000.. (training used 0..200) against two controls, an untrained VAE and
+//! uniform samples in the room's box; its last line is one JSON object.
+
+use anyhow::{bail, Context, Result};
+use clap::Parser;
+use envfield::grid::{Cell3, ContinuousField3, Field2, HeatMapStyle};
+use envfield::scene::{generate_room, sample_surface, Room, RoomConfig, Scene, TriangleMesh};
+use envfield::vae::{
+    afford_all, region_quality, train_field3, uniform_in_room, AccessibleRegion, Cvae, ExactField3,
+    Field3Config, LearnedField3, RegionConfig, RegionQuality,
+};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+#[global_allocator]
+static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
+#[derive(Parser)]
+#[command(about = "The accessible region of a room and the 3D fields over it")]
+struct Args {
+    /// A scene to read instead of a generated room: a triangle mesh as OBJ or PLY (metres,
+    /// z up).
+    #[arg(long)]
+    scene: Option<PathBuf>,
+    /// Seed of the generated room (10000 and up were never trained on).
+    #[arg(long, default_value_t = 10_000)]
+    seed: u64,
+    /// The VAE's weights.
+    #[arg(long)]
+    vae: Option<PathBuf>,
+    /// Torso samples drawn per room.
+    #[arg(long, default_value_t = 6000)]
+    samples: usize,
+    /// Output folder.
+    #[arg(long, default_value = "out/accessible")]
+    out: PathBuf,
+    /// Evaluate this many held-out generated rooms instead of drawing one.
+    #[arg(long)]
+    rooms: Option<u64>,
+    /// Train and measure the learned field on the first this many rooms of --rooms.
+    #[arg(long, default_value_t = 5)]
+    field_rooms: u64,
+    /// Training steps of each learned field.
+    #[arg(long, default_value_t = 3000)]
+    field_steps: u64,
+    /// Skip the learned field.
+    #[arg(long)]
+    no_field: bool,
+    /// Print the summary as one JSON line (always the last line with --rooms).
+    #[arg(long)]
+    json: bool,
+}
+
+fn vae_file(args: &Args) -> PathBuf {
+    args.vae
+        .clone()
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("models/vae.safetensors"))
+}
+
+/// The VAE's cloud of a scene: its own number of surface points.
+fn cloud(vae: &Cvae, scene: &Scene, seed: u64) -> Result<Vec<[f32; 3]>> {
+    Ok(sample_surface(scene, vae.config().points, seed)?
+        .iter()
+        .map(|p| [p.x, p.y, p.z])
+        .collect())
+}
+
+/// A top-down picture of a 3D field: each column's value at its highest accessible voxel.
+fn field_png(region: &AccessibleRegion, field: &dyn ContinuousField3, path: &Path) -> Result<()> {
+    let [nx, ny, nz] = region.frame.shape;
+    let mut values = vec![f32::INFINITY; nx * ny];
+    for x in 0..nx {
+        for y in 0..ny {
+            if let Some(z) = (0..nz)
+                .rev()
+                .find(|&z| region.grid.is_free(Cell3::new(x, y, z)))
+            {
+                let c = region.frame.center(Cell3::new(x, y, z));
+                values[(ny - 1 - y) * nx + x] = field.value([c.x, c.y, c.z])?;
+            }
+        }
+    }
+    Field2::new(ny, nx, values)?.write_png(
+        path,
+        &HeatMapStyle {
+            scale: 6,
+            ..HeatMapStyle::default()
+        },
+    )?;
+    Ok(())
+}
+
+fn progress(len: u64, what: &str) -> Result<ProgressBar> {
+    let bar = ProgressBar::new(len).with_message(what.to_string());
+    bar.set_style(ProgressStyle::with_template(
+        "{msg:>24} {bar:30} {pos}/{len} {elapsed_precise} (eta {eta})",
+    )?);
+    Ok(bar)
+}
+
+/// The region of `samples` in `scene` (filtered), or the filter's error.
+fn region_of(
+    scene: &Scene,
+    samples: &[[f32; 3]],
+    config: &RegionConfig,
+) -> Result<AccessibleRegion> {
+    let affords = afford_all(scene, samples, config)?;
+    let kept = samples
+        .iter()
+        .zip(&affords)
+        .filter(|(_, a)| a.kept())
+        .map(|(s, _)| *s)
+        .collect();
+    Ok(AccessibleRegion::from_samples(scene, kept, config.voxel)?)
+}
+
+/// A goal for the pictures: the kept sample nearest the region's middle.
+fn middle_goal(region: &AccessibleRegion) -> [f32; 3] {
+    let n = region.samples.len() as f32;
+    let mean = region.samples.iter().fold([0.0f32; 3], |a, s| {
+        [a[0] + s[0] / n, a[1] + s[1] / n, a[2] + s[2] / n]
+    });
+    *region
+        .samples
+        .iter()
+        .filter(|s| region.contains(**s))
+        .min_by(|a, b| {
+            let d = |s: &[f32; 3]| (s[0] - mean[0]).powi(2) + (s[1] - mean[1]).powi(2);
+            d(a).total_cmp(&d(b))
+        })
+        .unwrap_or(&region.samples[0])
+}
+
+fn one(args: &Args, vae: &Cvae) -> Result<()> {
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("creating {}", args.out.display()))?;
+    envfield::grid::check_writable(args.out.join("summary.json"))?;
+    let (scene, room): (Scene, Option<Room>) = match &args.scene {
+        Some(f) => (Scene::from_mesh("scene", &TriangleMesh::read(f)?)?, None),
+        None => {
+            let room = generate_room(&RoomConfig::default(), args.seed)?;
+            (room.scene.clone(), Some(room))
+        }
+    };
+    scene.to_mesh().write(args.out.join("scene.obj"))?;
+    let t = Instant::now();
+    let samples = vae.sample(&cloud(vae, &scene, args.seed)?, args.samples, args.seed)?;
+    let sample_ms = t.elapsed().as_secs_f64() * 1e3;
+    let config = RegionConfig::default();
+    let t = Instant::now();
+    let region = region_of(&scene, &samples, &config)?;
+    let region_ms = t.elapsed().as_secs_f64() * 1e3;
+    let kept: Vec<_> = region
+        .samples
+        .iter()
+        .map(|s| envfield::scene::nalgebra::Point3::new(s[0], s[1], s[2]))
+        .collect();
+    envfield::scene::write_point_cloud(&kept, args.out.join("samples.ply"))?;
+    region.write_ply(args.out.join("region.ply"))?;
+    region.write_png(args.out.join("region.png"), 6)?;
+    let goal = middle_goal(&region);
+    let exact = ExactField3::new(&region, goal)?;
+    field_png(&region, &exact, &args.out.join("field_exact.png"))?;
+    let quality = match &room {
+        Some(r) => Some(region_quality(r, &samples, &config)?),
+        None => None,
+    };
+    let learned = if args.no_field {
+        None
+    } else {
+        let bar = progress(args.field_steps, "learned 3D field")?;
+        let cfg = Field3Config {
+            steps: args.field_steps,
+            ..Field3Config::default()
+        };
+        let (net, report) = train_field3(&region, &cfg, None, |s, _, _| bar.set_position(s))?;
+        bar.finish_and_clear();
+        let field = LearnedField3::new(&net, &region, exact.goal())?;
+        field_png(&region, &field, &args.out.join("field_learned.png"))?;
+        Some(report)
+    };
+    // How high the drawn samples are, in bands of 0.1 m (before the filter).
+    let mut heights = std::collections::BTreeMap::<i32, usize>::new();
+    for s in &samples {
+        *heights.entry((s[2] * 10.0).floor() as i32).or_default() += 1;
+    }
+    let heights: serde_json::Map<String, serde_json::Value> = heights
+        .into_iter()
+        .map(|(k, v)| (format!("{:.1}", k as f32 / 10.0), v.into()))
+        .collect();
+    let summary = serde_json::json!({
+        "drawn_by_height_m": heights,
+        "scene": args.scene.as_ref().map(|p| p.display().to_string()).unwrap_or(format!("generated room {}", args.seed)),
+        "samples": samples.len(),
+        "kept": region.samples.len(),
+        "accessible_voxels": region.grid.free_count(),
+        "components_before_largest": region.components,
+        "voxel_m": region.frame.voxel,
+        "goal": goal,
+        "quality": quality,
+        "learned_field": learned,
+        "sample_ms": sample_ms,
+        "filter_and_voxels_ms": region_ms,
+        "out": args.out,
+    });
+    envfield::grid::write_atomic(
+        args.out.join("summary.json"),
+        serde_json::to_string_pretty(&summary)?.as_bytes(),
+    )?;
+    println!(
+        "{}",
+        if args.json {
+            summary.to_string()
+        } else {
+            serde_json::to_string_pretty(&summary)?
+        }
+    );
+    Ok(())
+}
+
+/// Means of the quality figures.
+fn mean(q: &[RegionQuality]) -> serde_json::Value {
+    let m = |f: fn(&RegionQuality) -> f64| q.iter().map(f).sum::<f64>() / q.len().max(1) as f64;
+    serde_json::json!({
+        "kept_pct": m(|x| x.kept_pct),
+        "affordable_pct": m(|x| x.affordable_pct),
+        "floor_coverage_pct": m(|x| x.floor_coverage_pct),
+        "seat_coverage_pct": m(|x| x.seat_coverage_pct),
+    })
+}
+
+fn many(args: &Args, vae: &Cvae, rooms: u64) -> Result<()> {
+    let config = RegionConfig::default();
+    let untrained = Cvae::new(vae.config().clone(), 1)?;
+    let (mut ours, mut random, mut uniform) = (Vec::new(), Vec::new(), Vec::new());
+    let mut fields = Vec::new();
+    let bar = progress(rooms, "held-out rooms")?;
+    for k in 0..rooms {
+        let seed = 10_000 + k;
+        let room = generate_room(&RoomConfig::default(), seed)?;
+        let c = cloud(vae, &room.scene, seed)?;
+        let samples = vae.sample(&c, args.samples, seed)?;
+        ours.push(region_quality(&room, &samples, &config)?);
+        random.push(region_quality(
+            &room,
+            &untrained.sample(&c, args.samples, seed)?,
+            &config,
+        )?);
+        let box_samples = uniform_in_room(&room, 2.5, args.samples, seed);
+        uniform.push(region_quality(&room, &box_samples, &config)?);
+        if !args.no_field && k < args.field_rooms {
+            let region = region_of(&room.scene, &samples, &config)?;
+            let cfg = Field3Config {
+                steps: args.field_steps,
+                seed,
+                ..Field3Config::default()
+            };
+            let (_, report) = train_field3(&region, &cfg, None, |_, _, _| {})?;
+            eprintln!("room {seed}: learned field {report:?}");
+            fields.push(report);
+        }
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    let per_room: Vec<_> = ours
+        .iter()
+        .enumerate()
+        .map(|(k, q)| serde_json::json!({"seed": 10_000 + k as u64, "quality": q}))
+        .collect();
+    let fm = |f: fn(&envfield::vae::Field3Report) -> f64| {
+        fields.iter().map(f).sum::<f64>() / fields.len().max(1) as f64
+    };
+    let o = mean(&ours);
+    let line = serde_json::json!({
+        "rooms": rooms,
+        "samples_per_room": args.samples,
+        "affordable_pct": o["affordable_pct"],
+        "kept_pct": o["kept_pct"],
+        "floor_coverage_pct": o["floor_coverage_pct"],
+        "seat_coverage_pct": o["seat_coverage_pct"],
+        "min_floor_coverage_pct": ours.iter().map(|q| q.floor_coverage_pct).fold(f64::INFINITY, f64::min),
+        "min_seat_coverage_pct": ours.iter().map(|q| q.seat_coverage_pct).fold(f64::INFINITY, f64::min),
+        "untrained_vae": mean(&random),
+        "uniform_box": mean(&uniform),
+        "field_rooms": fields.len(),
+        "field_median_err_m": (!fields.is_empty()).then(|| fm(|r| r.median_err_m)),
+        "field_p95_err_m": (!fields.is_empty()).then(|| fm(|r| r.p95_err_m)),
+        "field_worst_p95_err_m": fields.iter().map(|r| r.p95_err_m).fold(None, |a: Option<f64>, b| Some(a.map_or(b, |a| a.max(b)))),
+        "train_s_per_room": (!fields.is_empty()).then(|| fm(|r| r.train_s)),
+        "per_room": per_room,
+    });
+    if !args.json {
+        eprintln!("{}", serde_json::to_string_pretty(&line)?);
+    }
+    println!("{line}");
+    Ok(())
+}
+
+fn main() -> Result<()> {
+    let args = Args::parse();
+    if args.samples == 0 || args.samples > 1_000_000 {
+        bail!("--samples must be in 1..=1000000 (got {})", args.samples);
+    }
+    let file = vae_file(&args);
+    let vae = Cvae::load(&file).with_context(|| {
+        format!(
+            "loading the VAE {} (train one with the command in models/README.md)",
+            file.display()
+        )
+    })?;
+    match args.rooms {
+        Some(0) => bail!("--rooms 0 evaluates nothing"),
+        Some(n) if n > 10_000 => bail!("--rooms {n}: at most 10000"),
+        Some(n) => many(&args, &vae, n),
+        None => one(&args, &vae),
+    }
+}
