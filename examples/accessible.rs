@@ -57,12 +57,23 @@ struct Args {
     /// Training steps of each learned field.
     #[arg(long, default_value_t = 3000)]
     field_steps: u64,
+    /// Radius of the torso sphere the filter keeps clear of geometry, metres.
+    #[arg(long)]
+    torso_radius: Option<f32>,
     /// Skip the learned field.
     #[arg(long)]
     no_field: bool,
     /// Print the summary as one JSON line (always the last line with --rooms).
     #[arg(long)]
     json: bool,
+}
+
+fn region_config(args: &Args) -> RegionConfig {
+    let d = RegionConfig::default();
+    RegionConfig {
+        torso_radius: args.torso_radius.unwrap_or(d.torso_radius),
+        ..d
+    }
 }
 
 fn vae_file(args: &Args) -> PathBuf {
@@ -160,7 +171,7 @@ fn one(args: &Args, vae: &Cvae) -> Result<()> {
     let t = Instant::now();
     let samples = vae.sample(&cloud(vae, &scene, args.seed)?, args.samples, args.seed)?;
     let sample_ms = t.elapsed().as_secs_f64() * 1e3;
-    let config = RegionConfig::default();
+    let config = region_config(args);
     let t = Instant::now();
     let region = region_of(&scene, &samples, &config)?;
     let region_ms = t.elapsed().as_secs_f64() * 1e3;
@@ -202,7 +213,13 @@ fn one(args: &Args, vae: &Cvae) -> Result<()> {
         .into_iter()
         .map(|(k, v)| (format!("{:.1}", k as f32 / 10.0), v.into()))
         .collect();
+    // What the drawn samples afford: (first supported pose, first valid pose) counts.
+    let mut kinds = std::collections::BTreeMap::<String, usize>::new();
+    for a in afford_all(&scene, &samples, &config)? {
+        *kinds.entry(format!("{}:{:?}/{:?}", a.clear, a.supported, a.valid)).or_default() += 1;
+    }
     let summary = serde_json::json!({
+        "affords_clear_supported_valid": kinds,
         "drawn_by_height_m": heights,
         "scene": args.scene.as_ref().map(|p| p.display().to_string()).unwrap_or(format!("generated room {}", args.seed)),
         "samples": samples.len(),
@@ -244,7 +261,7 @@ fn mean(q: &[RegionQuality]) -> serde_json::Value {
 }
 
 fn many(args: &Args, vae: &Cvae, rooms: u64) -> Result<()> {
-    let config = RegionConfig::default();
+    let config = region_config(args);
     let untrained = Cvae::new(vae.config().clone(), 1)?;
     let (mut ours, mut random, mut uniform) = (Vec::new(), Vec::new(), Vec::new());
     let mut fields = Vec::new();

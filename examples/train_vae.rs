@@ -33,6 +33,12 @@ struct Args {
     /// Adam's learning rate (the paper: 5e-5).
     #[arg(long, default_value_t = 5e-5)]
     lr: f64,
+    /// The KL weight at the top of each annealing cycle.
+    #[arg(long, default_value_t = 1.0)]
+    kl_max: f64,
+    /// The reconstruction's standard deviation, metres.
+    #[arg(long, default_value_t = 0.1)]
+    recon_sigma: f32,
     /// Cycles of the KL annealing.
     #[arg(long, default_value_t = 4)]
     cycles: usize,
@@ -89,6 +95,8 @@ fn main() -> Result<()> {
                 .map_err(|_| anyhow::anyhow!("--source-weights takes four numbers"))?;
             let config = VaeTrainConfig {
                 source_weights,
+                kl_max: args.kl_max,
+                recon_sigma: args.recon_sigma,
                 lr: args.lr,
                 steps: args.steps,
                 scenes_per_step: args.scenes,

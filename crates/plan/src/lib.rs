@@ -15,6 +15,9 @@
 //!   path), rechecking every path itself.
 //! - [`PolicyWalk`]: a planner for any [`Policy`](envfield_grid::Policy) (one decision per
 //!   step, as VIN makes them).
+//! - [`FieldSearch3`]: the pose-dependent search on a continuous 3D field (paper section 4.2),
+//!   each step's 26 candidates asked in one batch and filtered by a [`StepFilter`]; and the
+//!   sampling baselines [`rrt`], [`rrt_star`] and [`prm`] on any [`Space3`].
 //! - [`PlannerKind`]: planners by name (`field`, `relay`, `octile`, `fmm`, `astar`, ...), the
 //!   names the examples and benchmarks take.
 //!
@@ -43,6 +46,8 @@ mod planner;
 mod policy;
 mod profile;
 mod relay;
+mod sampling;
+mod search3;
 
 pub use astar::{AStar, Octile};
 pub use descent::{descend, FieldDescent};
@@ -56,3 +61,7 @@ pub use planner::{path_length, PlanOutcome, Planner};
 pub use policy::PolicyWalk;
 pub use profile::{Band, DecisionProfile};
 pub use relay::{relay_cells, remove_loops, RelayDescent};
+pub use sampling::{edge_free, prm, rrt, rrt_star, SamplingConfig, Space3};
+pub use search3::{
+    directions26, distance, straight_line, AnyStep, FieldSearch3, Path3, StepFilter,
+};

@@ -3,7 +3,7 @@
 //! per scene as in the paper), both behind [`ContinuousField3`].
 
 use crate::{AccessibleRegion, Result, VaeError};
-use envfield_eikonal::FastMarching;
+use envfield_eikonal::{FastMarching, Order};
 use envfield_grid::{Cell3, ContinuousField3, Field3, Point3, Point3m, SplitMix64};
 use envfield_nets::{
     Batch, FieldNet, GoalConfig, MlpConfig, ModelConfig, TargetEncoding, TrainConfig, Trainer,
@@ -36,7 +36,7 @@ fn to_voxel(frame: &VoxelFrame, p: Point3m) -> envfield_grid::Result<Point3> {
 }
 
 /// The exact 3D field of an accessible region for one goal: fast marching over the accessible
-/// voxels (first order, 6 neighbours), in metres; trilinear between voxel centres, infinite
+/// voxels (second order, 6 neighbours), in metres; trilinear between voxel centres, infinite
 /// where a weighted corner is not accessible.
 #[derive(Clone, Debug)]
 pub struct ExactField3 {
@@ -65,7 +65,7 @@ impl ExactField3 {
                 "goal voxel {goal:?} is outside the accessible region"
             )));
         }
-        let cells = FastMarching::default().solve3(&region.grid, &[goal])?;
+        let cells = FastMarching::with_order(Order::Second).solve3(&region.grid, &[goal])?;
         let v = region.frame.voxel;
         let metres = Field3::new(
             cells.shape(),
@@ -235,7 +235,7 @@ pub fn train_field3(
     }
     let mut rng = SplitMix64::new(config.seed ^ 0xF13D);
     let goals = pick_cells(&free, config.goals, &mut rng);
-    let fmm = FastMarching::default();
+    let fmm = FastMarching::with_order(Order::Second);
     let fields = fmm.solve3_many(&region.grid, &goals)?;
     let longest = fields
         .iter()

@@ -37,6 +37,7 @@ mod data;
 mod error;
 mod field3;
 mod model;
+mod nav;
 pub mod region;
 mod train;
 
@@ -48,6 +49,7 @@ pub use data::{
 pub use error::{Result, VaeError};
 pub use field3::{train_field3, ExactField3, Field3Config, Field3Report, LearnedField3};
 pub use model::Cvae;
+pub use nav::{offset, point, PoseFilter};
 pub use region::{
     afford, afford_all, covered_pct, region_quality, uniform_in_room, AccessibleRegion, Afford,
     RegionConfig, RegionQuality,

@@ -197,9 +197,52 @@ pub struct AccessibleRegion {
     pub samples: Vec<[f32; 3]>,
     /// Connected sets before the largest was kept.
     pub components: usize,
+    /// The accessible voxels' indices, made on first use.
+    free: std::sync::OnceLock<Vec<usize>>,
 }
 
 impl AccessibleRegion {
+    /// A region from its parts: `grid`'s free voxels on `frame` are accessible.
+    ///
+    /// # Errors
+    /// [`VaeError::InvalidInput`] when the grid's shape is not the frame's or no voxel is
+    /// free.
+    pub fn new(
+        frame: VoxelFrame,
+        grid: Grid3,
+        samples: Vec<[f32; 3]>,
+        components: usize,
+    ) -> Result<Self> {
+        if grid.shape() != frame.shape {
+            return Err(VaeError::InvalidInput(format!(
+                "a region's grid {:?} must have its frame's shape {:?}",
+                grid.shape(),
+                frame.shape
+            )));
+        }
+        if grid.free_count() == 0 {
+            return Err(VaeError::InvalidInput(
+                "a region needs an accessible voxel".into(),
+            ));
+        }
+        Ok(Self {
+            frame,
+            grid,
+            samples,
+            components,
+            free: std::sync::OnceLock::new(),
+        })
+    }
+
+    /// The accessible voxels' indices (C order).
+    pub fn free_indices(&self) -> &[usize] {
+        self.free.get_or_init(|| {
+            (0..self.grid.len())
+                .filter(|&i| !self.grid.obstacles()[i])
+                .collect()
+        })
+    }
+
     /// The region of `kept` samples (already filtered) on a lattice covering `scene`.
     ///
     /// # Errors
@@ -290,12 +333,7 @@ impl AccessibleRegion {
                 "the kept samples all lie outside the scene's box".into(),
             ));
         }
-        Ok(Self {
-            frame,
-            grid,
-            samples: kept,
-            components: sizes.len(),
-        })
+        Self::new(frame, grid, kept, sizes.len())
     }
 
     /// Whether `p` (metres) lies in an accessible voxel.

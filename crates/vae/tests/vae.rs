@@ -268,12 +268,7 @@ fn box_region(shape: [usize; 3], voxel: f32) -> AccessibleRegion {
         shape,
     };
     let grid = Grid3::new(shape[0], shape[1], shape[2]).unwrap();
-    AccessibleRegion {
-        frame,
-        grid,
-        samples: vec![[0.05, 0.05, 0.05]],
-        components: 1,
-    }
+    AccessibleRegion::new(frame, grid, vec![[0.05, 0.05, 0.05]], 1).unwrap()
 }
 
 /// The exact field of an open box is the straight-line distance (fast marching, first order,
@@ -289,7 +284,7 @@ fn the_exact_field_of_an_open_box_is_the_distance() {
         Cell3::new(30, 20, 4),
     ] {
         let p = region.frame.center(c);
-        let d = ((p - goal).norm()) as f32;
+        let d = (p - goal).norm();
         let v = field.value([p.x, p.y, p.z]).unwrap();
         assert!((v - d).abs() < 0.08 * d + 0.02, "{c:?}: {v} against {d}");
     }

@@ -1,0 +1,295 @@
+//! Pose-dependent search on a continuous 3D field (paper section 4.2, "Pose-dependent
+//! trajectory"): from the start, step `s` towards each of the 26 directions of
+//! `{-1, 0, 1}^3 \ {0}`, normalised so every candidate lies exactly `s` away; ask the field at
+//! all candidates in one batch, keep the ones a [`StepFilter`] allows (the pose of this step
+//! supported and collision-free, or simply inside the accessible region), and move to the
+//! smallest value.
+
+use crate::{PlanError, Result};
+use envfield_grid::{ContinuousField3, Point3m};
+use serde::{Deserialize, Serialize};
+use std::collections::HashSet;
+
+/// Which candidate torso locations a step may move to.
+pub trait StepFilter {
+    /// For step `step` (0 for the first move) from `from`: whether each of `candidates` is
+    /// allowed.
+    ///
+    /// # Errors
+    /// When the check itself fails (a bad point, a failing scene query).
+    fn keep(&self, step: usize, from: Point3m, candidates: &[Point3m]) -> Result<Vec<bool>>;
+}
+
+/// Every candidate is allowed.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct AnyStep;
+
+impl StepFilter for AnyStep {
+    fn keep(&self, _: usize, _: Point3m, candidates: &[Point3m]) -> Result<Vec<bool>> {
+        Ok(vec![true; candidates.len()])
+    }
+}
+
+/// A path in 3D and how it ended.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Path3 {
+    /// The torso locations, start first.
+    pub points: Vec<Point3m>,
+    /// The last point lies within the tolerance of the goal.
+    pub reached: bool,
+    /// Distance from the last point to the goal, metres.
+    pub final_distance: f32,
+}
+
+impl Path3 {
+    /// A path of `points` judged against `goal` with `tolerance`.
+    pub fn ending(points: Vec<Point3m>, goal: Point3m, tolerance: f32) -> Self {
+        let last = *points.last().unwrap_or(&[f32::INFINITY; 3]);
+        let d = distance(last, goal);
+        Self {
+            points,
+            reached: d <= tolerance,
+            final_distance: d,
+        }
+    }
+
+    /// The polyline's length, metres.
+    pub fn length(&self) -> f32 {
+        self.points.windows(2).map(|w| distance(w[0], w[1])).sum()
+    }
+}
+
+/// Euclidean distance.
+pub fn distance(a: Point3m, b: Point3m) -> f32 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+}
+
+/// The 26 unit directions of `{-1, 0, 1}^3 \ {0}`.
+pub fn directions26() -> [Point3m; 26] {
+    let mut out = [[0.0; 3]; 26];
+    let mut k = 0;
+    for x in -1i32..=1 {
+        for y in -1i32..=1 {
+            for z in -1i32..=1 {
+                if (x, y, z) == (0, 0, 0) {
+                    continue;
+                }
+                let n = ((x * x + y * y + z * z) as f32).sqrt();
+                out[k] = [x as f32 / n, y as f32 / n, z as f32 / n];
+                k += 1;
+            }
+        }
+    }
+    out
+}
+
+/// The pose-dependent search's settings.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct FieldSearch3 {
+    /// Step length `s`, metres (the pose sequence's `step_length`).
+    pub step: f32,
+    /// The search stops when the torso is this close to the goal, metres.
+    pub tolerance: f32,
+    /// Steps at most.
+    pub max_steps: usize,
+}
+
+impl FieldSearch3 {
+    /// Searches from `start` to `goal` on `field`, each step's candidates filtered by
+    /// `filter`. When the goal lies within `s` and the filter allows it, the last step lands
+    /// on it. Farther than `2 s` from the goal a step never returns to a point within `s / 2`
+    /// of one already visited, so the walk cannot cycle there; nearer, it may, so that a
+    /// landing refused for one step's pose is tried again with the next. It ends at the goal,
+    /// at the step budget, or where no candidate is left (then `reached` is false).
+    ///
+    /// # Errors
+    /// [`PlanError::Invalid`] for a step, tolerance or point that is not positive / finite;
+    /// errors of the filter.
+    pub fn search<F, S>(
+        &self,
+        field: &F,
+        filter: &S,
+        start: Point3m,
+        goal: Point3m,
+    ) -> Result<Path3>
+    where
+        F: ContinuousField3 + ?Sized,
+        S: StepFilter + ?Sized,
+    {
+        let ok = self.step.is_finite()
+            && self.step > 0.0
+            && self.tolerance.is_finite()
+            && self.tolerance >= 0.0;
+        if !ok {
+            return Err(PlanError::Invalid(format!(
+                "3D search: a positive step and a tolerance >= 0 (got {} and {}); a pose \
+                 sequence with no motion has step length 0",
+                self.step, self.tolerance
+            )));
+        }
+        for (what, p) in [("start", start), ("goal", goal)] {
+            if !p.iter().all(|v| v.is_finite()) {
+                return Err(PlanError::Invalid(format!(
+                    "3D search: {what} {p:?} is not finite"
+                )));
+            }
+        }
+        let dirs = directions26();
+        let s = self.step;
+        let key = |p: Point3m| p.map(|v| (v / (0.5 * s)).round() as i64);
+        let mut visited = HashSet::from([key(start)]);
+        let mut points = vec![start];
+        let mut here = start;
+        for k in 0..self.max_steps {
+            let d = distance(here, goal);
+            if d <= self.tolerance {
+                break;
+            }
+            if d <= s && filter.keep(k, here, &[goal])?[0] {
+                points.push(goal);
+                break;
+            }
+            let candidates: Vec<Point3m> = dirs
+                .iter()
+                .map(|v| [here[0] + s * v[0], here[1] + s * v[1], here[2] + s * v[2]])
+                .collect();
+            let values = values_or_infinity(field, &candidates);
+            let keep = filter.keep(k, here, &candidates)?;
+            // Near the goal a refused landing is tried again with the next step's pose, so the
+            // walk may go back and forth there until the budget.
+            let near = d <= 2.0 * s;
+            let best = (0..candidates.len())
+                .filter(|&i| {
+                    keep[i]
+                        && values[i].is_finite()
+                        && (near || !visited.contains(&key(candidates[i])))
+                })
+                .min_by(|&a, &b| values[a].total_cmp(&values[b]));
+            let Some(i) = best else { break };
+            here = candidates[i];
+            visited.insert(key(here));
+            points.push(here);
+        }
+        Ok(Path3::ending(points, goal, self.tolerance))
+    }
+}
+
+/// The field at every candidate in one call; a batch that fails (a point outside the field's
+/// box) is asked point by point, and the failing points are infinite.
+fn values_or_infinity<F: ContinuousField3 + ?Sized>(field: &F, points: &[Point3m]) -> Vec<f32> {
+    match field.values(points) {
+        Ok(v) => v,
+        Err(_) => points
+            .iter()
+            .map(|&p| field.value(p).unwrap_or(f32::INFINITY))
+            .collect(),
+    }
+}
+
+/// The straight line from `start` to `goal` at `step` metres per point, the goal last: the
+/// no-learning floor of the 3D tables.
+///
+/// # Errors
+/// [`PlanError::Invalid`] for a step that is not positive or a point that is not finite.
+pub fn straight_line(start: Point3m, goal: Point3m, step: f32) -> Result<Vec<Point3m>> {
+    if !(step.is_finite() && step > 0.0 && start.iter().chain(&goal).all(|v| v.is_finite())) {
+        return Err(PlanError::Invalid(format!(
+            "straight line: a positive step and finite ends (got {step}, {start:?}, {goal:?})"
+        )));
+    }
+    let d = distance(start, goal);
+    let n = (d / step).ceil().max(1.0) as usize;
+    Ok((0..=n)
+        .map(|i| {
+            let t = i as f32 / n as f32;
+            std::array::from_fn(|a| start[a] + t * (goal[a] - start[a]))
+        })
+        .collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The distance to a goal point in open space.
+    struct Cone(Point3m);
+
+    impl ContinuousField3 for Cone {
+        fn value(&self, p: Point3m) -> envfield_grid::Result<f32> {
+            Ok(distance(p, self.0))
+        }
+        fn gradient(&self, _: Point3m) -> envfield_grid::Result<Option<Point3m>> {
+            Ok(None)
+        }
+    }
+
+    /// No candidate with z below 0.5 (a floor the torso must stay above).
+    struct Above(f32);
+
+    impl StepFilter for Above {
+        fn keep(&self, _: usize, _: Point3m, c: &[Point3m]) -> Result<Vec<bool>> {
+            Ok(c.iter().map(|p| p[2] >= self.0).collect())
+        }
+    }
+
+    #[test]
+    fn the_search_walks_a_cone_to_its_goal_near_the_straight_line() {
+        let goal = [2.0, 1.0, 1.0];
+        let search = FieldSearch3 {
+            step: 0.1,
+            tolerance: 0.02,
+            max_steps: 200,
+        };
+        let path = search
+            .search(&Cone(goal), &AnyStep, [0.0, 0.0, 1.0], goal)
+            .unwrap();
+        assert!(path.reached, "{path:?}");
+        assert!(distance(*path.points.last().unwrap(), goal) <= 0.02);
+        let straight = distance([0.0, 0.0, 1.0], goal);
+        assert!(
+            path.length() < 1.1 * straight,
+            "{} against {straight}",
+            path.length()
+        );
+        // Every step is s long but the last.
+        for w in path.points[..path.points.len() - 1].windows(2) {
+            assert!((distance(w[0], w[1]) - 0.1).abs() < 1e-5);
+        }
+    }
+
+    #[test]
+    fn the_filter_is_obeyed_and_a_dead_end_stops_the_walk() {
+        let goal = [1.0, 0.0, 0.0];
+        let search = FieldSearch3 {
+            step: 0.1,
+            tolerance: 0.02,
+            max_steps: 100,
+        };
+        let path = search
+            .search(&Cone(goal), &Above(0.5), [0.0, 0.0, 1.0], goal)
+            .unwrap();
+        assert!(!path.reached);
+        assert!(path.points.iter().all(|p| p[2] >= 0.5 - 1e-6));
+        assert!(path.final_distance > 0.4);
+        let bad = FieldSearch3 {
+            step: 0.0,
+            ..search
+        };
+        let e = bad
+            .search(&Cone(goal), &AnyStep, [0.0; 3], goal)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("step length 0"), "{e}");
+        assert!(search
+            .search(&Cone(goal), &AnyStep, [f32::NAN, 0.0, 0.0], goal)
+            .is_err());
+    }
+
+    #[test]
+    fn the_straight_line_ends_on_the_goal() {
+        let line = straight_line([0.0; 3], [1.0, 0.0, 0.0], 0.3).unwrap();
+        assert_eq!(line.len(), 5);
+        assert_eq!(*line.last().unwrap(), [1.0, 0.0, 0.0]);
+        assert!(straight_line([0.0; 3], [1.0; 3], 0.0).is_err());
+    }
+}

@@ -1,0 +1,587 @@
+//! Human navigation in 3D rooms (paper section 4.2, Tables 3 and 4): the pose-dependent search
+//! on the learned 3D field, with and without affordance, on the exact field, and RRT, RRT*,
+//! PRM and the straight line on the same accessible region and collision test; every path is
+//! fitted with the pose sequence and its poses checked.
+//!
+//! ```text
+//! cargo run --release --example room_nav                              # the shipped room, a few pairs
+//! cargo run --release --example room_nav -- --rooms 5 --pairs 20 --json   # the tables
+//! cargo run --release --example room_nav -- --scene room.obj          # a scene of your own
+//! ```
+//!
+//! Walking pairs join two standing places of the accessible region at least a metre apart;
+//! sit-down pairs start where the sit-down sequence starts in front of a seat and end seated.
+//! Writes `scene.obj`, `region.ply`, `path_<planner>.obj`, `poses_<planner>.json` (the first
+//! pair's aligned poses) and `top.png` (every planner's first path over the floor) to `--out`.
+//! The last line is one JSON object (`--json`).
+
+use anyhow::{bail, Context, Result};
+use clap::Parser;
+use envfield::affordance::{align_in_scene, walk, AlignConfig, PoseSequence, Support, WalkConfig};
+use envfield::grid::{Cell3, ContinuousField3, Point3m, SplitMix64};
+use envfield::nets::FieldNet;
+use envfield::plan::{
+    prm, rrt, rrt_star, straight_line, FieldSearch3, Path3, SamplingConfig, StepFilter,
+};
+use envfield::scene::nalgebra::Point3;
+use envfield::scene::{
+    generate_room, sample_surface, write_polyline_obj, Room, RoomConfig, Scene, TriangleMesh,
+};
+use envfield::vae::{
+    afford, afford_all, point, sit_on, train_field3, AccessibleRegion, Cvae, ExactField3,
+    Field3Config, LearnedField3, PoseFilter, RegionConfig,
+};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+#[global_allocator]
+static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
+/// The room whose learned field ships in `models/`.
+const SHIPPED_ROOM: u64 = 10_000;
+
+#[derive(Parser)]
+#[command(
+    about = "Navigate people through 3D rooms: ours against RRT, RRT*, PRM and the straight line"
+)]
+struct Args {
+    /// A scene to read instead of a generated room (OBJ or PLY, metres, z up).
+    #[arg(long)]
+    scene: Option<PathBuf>,
+    /// Seed of the generated room (10000 and up were never seen by the VAE).
+    #[arg(long, default_value_t = SHIPPED_ROOM)]
+    seed: u64,
+    /// Evaluate this many rooms (seeds from --seed on).
+    #[arg(long, default_value_t = 1)]
+    rooms: u64,
+    /// Walking pairs per room (sit-down pairs: one per reachable seat).
+    #[arg(long, default_value_t = 4)]
+    pairs: usize,
+    /// The VAE's weights.
+    #[arg(long)]
+    vae: Option<PathBuf>,
+    /// The learned field's weights for the room (default: models/room_field_<seed>.safetensors
+    /// when it is there; otherwise the field is trained).
+    #[arg(long)]
+    field: Option<PathBuf>,
+    /// Training steps of a room's learned field.
+    #[arg(long, default_value_t = 3000)]
+    field_steps: u64,
+    /// Save a trained field here (for a single room).
+    #[arg(long)]
+    save_field: Option<PathBuf>,
+    /// RRT* budget of the second row (raised until its path ratio matches ours).
+    #[arg(long, default_value_t = 5000)]
+    big_budget: usize,
+    /// Torso samples drawn for the accessible region.
+    #[arg(long, default_value_t = 6000)]
+    samples: usize,
+    /// Output folder.
+    #[arg(long, default_value = "out/room_nav")]
+    out: PathBuf,
+    /// The summary as one JSON line only.
+    #[arg(long)]
+    json: bool,
+}
+
+const PLANNERS: [&str; 8] = [
+    "ours",
+    "ours_noaff",
+    "ours_exact",
+    "rrt",
+    "rrtstar",
+    "rrtstar_big",
+    "prm",
+    "line",
+];
+
+/// One planner's result on one pair.
+#[derive(Clone, Debug, Default)]
+struct Outcome {
+    reached: bool,
+    dist_m: f64,
+    seconds: f64,
+    path_ratio: f64,
+    support: f64,
+    free: f64,
+    valid: f64,
+}
+
+fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// The shipped learned field of the room, if any.
+fn shipped_field(seed: u64) -> Option<PathBuf> {
+    let p = root().join(format!("models/room_field_{seed}.safetensors"));
+    p.is_file().then_some(p)
+}
+
+struct Pair {
+    start: Point3m,
+    goal: Point3m,
+    sequence: PoseSequence,
+    repeat: bool,
+    kind: &'static str,
+}
+
+/// Walking pairs between standing places of the region (kept samples that afford standing)
+/// at least a metre apart along the exact field, and sit-down pairs at every seat whose start
+/// and seated torso both lie in the region.
+fn pairs(
+    room: Option<&Room>,
+    scene: &Scene,
+    region: &AccessibleRegion,
+    count: usize,
+    seed: u64,
+) -> Result<Vec<Pair>> {
+    let config = RegionConfig::default();
+    let standing: Vec<Point3m> = region
+        .samples
+        .iter()
+        .copied()
+        .filter(|&s| region.contains(s))
+        .filter(|&s| afford(scene, s, &config).is_ok_and(|a| a.valid == Some(Support::Standing)))
+        .collect();
+    if standing.len() < 2 {
+        bail!("fewer than two standing places in the accessible region");
+    }
+    let gait = walk(&WalkConfig::default(), seed)?;
+    let mut rng = SplitMix64::new(seed ^ 0x9A1B);
+    let mut out = Vec::new();
+    let mut tries = 0;
+    while out.iter().filter(|p: &&Pair| p.kind == "walk").count() < count && tries < 100 * count {
+        tries += 1;
+        let (a, b) = (
+            standing[rng.below(standing.len())],
+            standing[rng.below(standing.len())],
+        );
+        let exact = ExactField3::new(region, b)?;
+        let d = exact.value(a)?;
+        if d.is_finite() && d >= 1.0 {
+            out.push(Pair {
+                start: a,
+                goal: b,
+                sequence: gait.clone(),
+                repeat: true,
+                kind: "walk",
+            });
+        }
+    }
+    if let Some(room) = room {
+        for f in &room.furniture {
+            if let Some(seq) = sit_on(f)? {
+                let t0 = seq.frames[0].torso();
+                let t1 = seq.frames.last().expect("frames").torso();
+                let (s, g) = ([t0.x, t0.y, t0.z], [t1.x, t1.y, t1.z]);
+                if region.contains(s) && region.contains(g) {
+                    out.push(Pair {
+                        start: s,
+                        goal: g,
+                        sequence: seq,
+                        repeat: false,
+                        kind: "sit",
+                    });
+                }
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// The poses of `sequence` fitted to `path` (resampled at the sequence's step unless it is
+/// ours, whose points are the steps): support, collision-free and valid shares, and the poses.
+fn fit(
+    scene: &Scene,
+    pair: &Pair,
+    path: &[Point3m],
+    resample: bool,
+) -> Result<(f64, f64, f64, PoseSequence)> {
+    let pts: Vec<Point3<f32>> = path.iter().map(|&p| point(p)).collect();
+    let step = pair.sequence.step_length().max(1e-3);
+    let traj = if resample && pts.len() > 1 {
+        envfield::affordance::resample_path(&pts, step)?
+    } else {
+        pts
+    };
+    let cfg = AlignConfig {
+        search_degrees: if pair.repeat { 0.0 } else { 6.0 },
+        ..AlignConfig::default()
+    };
+    let seq = if pair.repeat {
+        pair.sequence.clone()
+    } else {
+        // A sit-down plays once: its frames spread over the trajectory, the last seated.
+        let n = pair.sequence.frames.len();
+        let m = traj.len().max(1);
+        let pick = |i: usize| if m == 1 { n - 1 } else { i * (n - 1) / (m - 1) };
+        PoseSequence::new(
+            pair.sequence.fps,
+            pair.sequence.activity,
+            (0..m).map(|i| pair.sequence.frames[pick(i)]).collect(),
+            (0..m).map(|i| pair.sequence.supports[pick(i)]).collect(),
+        )?
+    };
+    let (aligned, reports) = align_in_scene(scene, &seq, &traj, &cfg)?;
+    let n = reports.len().max(1) as f64;
+    let share = |f: &dyn Fn(&envfield::affordance::AffordanceReport) -> bool| {
+        100.0 * reports.iter().filter(|r| f(r)).count() as f64 / n
+    };
+    Ok((
+        share(&|r| r.supported),
+        share(&|r| r.collision_free),
+        share(&|r| r.valid()),
+        aligned,
+    ))
+}
+
+/// Runs every planner on one pair.
+#[allow(clippy::type_complexity)]
+fn run_pair(
+    scene: &Scene,
+    region: &AccessibleRegion,
+    net: &FieldNet,
+    pair: &Pair,
+    big_budget: usize,
+    seed: u64,
+) -> Result<Vec<(&'static str, Outcome, Vec<Point3m>, PoseSequence)>> {
+    let goal_cell = region.cell(pair.goal, "goal")?;
+    region.cell(pair.start, "start")?;
+    let exact = ExactField3::at_cell(region, goal_cell)?;
+    let shortest = exact.value(pair.start)? as f64;
+    let learned = LearnedField3::new(net, region, goal_cell)?;
+    let step = pair.sequence.step_length();
+    let search = FieldSearch3 {
+        step,
+        tolerance: 0.02,
+        max_steps: (20.0 * shortest.max(0.5) / step as f64) as usize + 50,
+    };
+    let poses = PoseFilter {
+        scene,
+        region,
+        sequence: &pair.sequence,
+        repeat: pair.repeat,
+        affordance: Default::default(),
+    };
+    let sampling = SamplingConfig {
+        step: step.max(0.05),
+        seed,
+        ..SamplingConfig::default()
+    };
+    let mut out = Vec::new();
+    for name in PLANNERS {
+        let t = Instant::now();
+        let path: Path3 = match name {
+            "ours" => search.search(&learned, &poses, pair.start, pair.goal)?,
+            "ours_noaff" => {
+                search.search(&learned, region as &dyn StepFilter, pair.start, pair.goal)?
+            }
+            "ours_exact" => search.search(&exact, &poses, pair.start, pair.goal)?,
+            "rrt" => rrt(region, pair.start, pair.goal, &sampling)?,
+            "rrtstar" => rrt_star(region, pair.start, pair.goal, &sampling)?,
+            "rrtstar_big" => rrt_star(
+                region,
+                pair.start,
+                pair.goal,
+                &SamplingConfig {
+                    budget: big_budget,
+                    ..sampling
+                },
+            )?,
+            "prm" => prm(region, pair.start, pair.goal, &sampling)?,
+            _ => Path3::ending(straight_line(pair.start, pair.goal, step)?, pair.goal, 0.02),
+        };
+        let seconds = t.elapsed().as_secs_f64();
+        let ours = name.starts_with("ours");
+        let (support, free, valid, aligned) = fit(scene, pair, &path.points, !ours)?;
+        let o = Outcome {
+            reached: path.reached,
+            dist_m: path.final_distance as f64,
+            seconds,
+            path_ratio: if path.reached && shortest > 0.0 {
+                path.length() as f64 / shortest
+            } else {
+                f64::NAN
+            },
+            support,
+            free,
+            valid,
+        };
+        out.push((name, o, path.points, aligned));
+    }
+    Ok(out)
+}
+
+fn region_of(vae: &Cvae, scene: &Scene, samples: usize, seed: u64) -> Result<AccessibleRegion> {
+    let cloud: Vec<[f32; 3]> = sample_surface(scene, vae.config().points, seed)?
+        .iter()
+        .map(|p| [p.x, p.y, p.z])
+        .collect();
+    let drawn = vae.sample(&cloud, samples, seed)?;
+    let config = RegionConfig::default();
+    let affords = afford_all(scene, &drawn, &config)?;
+    let kept = drawn
+        .iter()
+        .zip(&affords)
+        .filter(|(_, a)| a.kept())
+        .map(|(s, _)| *s)
+        .collect();
+    Ok(AccessibleRegion::from_samples(scene, kept, config.voxel)?)
+}
+
+/// A top-down picture: accessible columns light, the rest dark, every planner's path in its
+/// colour, start green and goal magenta.
+fn top_png(region: &AccessibleRegion, paths: &[(&str, Vec<Point3m>)], path: &Path) -> Result<()> {
+    let [nx, ny, nz] = region.frame.shape;
+    let s = 6u32;
+    let mut img =
+        image::RgbImage::from_pixel(nx as u32 * s, ny as u32 * s, image::Rgb([40, 40, 48]));
+    for x in 0..nx {
+        for y in 0..ny {
+            if (0..nz).any(|z| region.grid.is_free(Cell3::new(x, y, z))) {
+                for px in 0..s {
+                    for py in 0..s {
+                        img.put_pixel(
+                            x as u32 * s + px,
+                            (ny - 1 - y) as u32 * s + py,
+                            image::Rgb([225, 232, 220]),
+                        );
+                    }
+                }
+            }
+        }
+    }
+    let colours: BTreeMap<&str, [u8; 3]> = [
+        ("ours", [220, 30, 30]),
+        ("ours_noaff", [250, 150, 30]),
+        ("ours_exact", [30, 160, 60]),
+        ("rrt", [40, 90, 220]),
+        ("rrtstar", [130, 60, 200]),
+        ("rrtstar_big", [200, 80, 200]),
+        ("prm", [20, 170, 190]),
+        ("line", [90, 90, 90]),
+    ]
+    .into_iter()
+    .collect();
+    let to_px = |p: Point3m| {
+        let x = (p[0] - region.frame.origin.x) / region.frame.voxel * s as f32;
+        let y =
+            (ny as f32 * s as f32) - (p[1] - region.frame.origin.y) / region.frame.voxel * s as f32;
+        (x, y)
+    };
+    let dot = |img: &mut image::RgbImage, (x, y): (f32, f32), r: i32, c: [u8; 3]| {
+        for dx in -r..=r {
+            for dy in -r..=r {
+                let (px, py) = (x as i32 + dx, y as i32 + dy);
+                if px >= 0 && py >= 0 && (px as u32) < img.width() && (py as u32) < img.height() {
+                    img.put_pixel(px as u32, py as u32, image::Rgb(c));
+                }
+            }
+        }
+    };
+    for (name, pts) in paths {
+        let c = colours.get(name).copied().unwrap_or([0, 0, 0]);
+        for w in pts.windows(2) {
+            let (a, b) = (to_px(w[0]), to_px(w[1]));
+            let n = ((b.0 - a.0).hypot(b.1 - a.1)).ceil().max(1.0) as usize;
+            for i in 0..=n {
+                let t = i as f32 / n as f32;
+                dot(
+                    &mut img,
+                    (a.0 + t * (b.0 - a.0), a.1 + t * (b.1 - a.1)),
+                    1,
+                    c,
+                );
+            }
+        }
+    }
+    if let Some((_, pts)) = paths.first() {
+        if let (Some(&a), Some(&b)) = (pts.first(), pts.last()) {
+            dot(&mut img, to_px(a), 4, [30, 200, 30]);
+            dot(&mut img, to_px(b), 4, [220, 30, 220]);
+        }
+    }
+    let mut bytes = Vec::new();
+    image::DynamicImage::ImageRgb8(img).write_to(
+        &mut std::io::Cursor::new(&mut bytes),
+        image::ImageFormat::Png,
+    )?;
+    envfield::grid::write_atomic(path, &bytes)?;
+    Ok(())
+}
+
+fn main() -> Result<()> {
+    let args = Args::parse();
+    if args.rooms == 0 || args.rooms > 1000 || args.pairs > 10_000 || args.samples == 0 {
+        bail!("--rooms 1..=1000, --pairs up to 10000 and --samples >= 1");
+    }
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("creating {}", args.out.display()))?;
+    envfield::grid::check_writable(args.out.join("top.png"))?;
+    let vae_file = args
+        .vae
+        .clone()
+        .unwrap_or_else(|| root().join("models/vae.safetensors"));
+    let vae =
+        Cvae::load(&vae_file).with_context(|| format!("loading the VAE {}", vae_file.display()))?;
+    let mut all: BTreeMap<&str, Vec<(&'static str, Outcome)>> = BTreeMap::new();
+    let mut field_s = Vec::new();
+    let mut pair_count = 0usize;
+    for k in 0..args.rooms {
+        let seed = args.seed + k;
+        let (scene, room) = match &args.scene {
+            Some(f) => (Scene::from_mesh("scene", &TriangleMesh::read(f)?)?, None),
+            None => {
+                let r = generate_room(&RoomConfig::default(), seed)?;
+                (r.scene.clone(), Some(r))
+            }
+        };
+        let region = region_of(&vae, &scene, args.samples, seed)?;
+        let file = args
+            .field
+            .clone()
+            .or_else(|| shipped_field(seed).filter(|_| args.scene.is_none()));
+        let net = match file {
+            Some(f) if k == 0 || args.field.is_none() => {
+                let net = FieldNet::load(&f)?;
+                let shape = region.frame.shape.to_vec();
+                match net.config() {
+                    envfield::nets::ModelConfig::Goal(c) if c.extent == shape => net,
+                    _ => bail!(
+                        "{}: this field was trained on another region (the VAE or the room \
+                         changed); train it again with --field-steps",
+                        f.display()
+                    ),
+                }
+            }
+            _ => {
+                let bar = ProgressBar::new(args.field_steps)
+                    .with_message(format!("room {seed}: 3D field"));
+                bar.set_style(ProgressStyle::with_template(
+                    "{msg:>24} {bar:30} {pos}/{len} {elapsed_precise} (eta {eta})",
+                )?);
+                let cfg = Field3Config {
+                    steps: args.field_steps,
+                    seed,
+                    ..Field3Config::default()
+                };
+                let (net, report) =
+                    train_field3(&region, &cfg, None, |s, _, _| bar.set_position(s))?;
+                bar.finish_and_clear();
+                eprintln!(
+                    "room {seed}: learned field, median error {:.3} m, p95 {:.3} m, {:.0} s",
+                    report.median_err_m, report.p95_err_m, report.train_s
+                );
+                field_s.push(report.train_s);
+                if let (Some(p), 1) = (&args.save_field, args.rooms) {
+                    net.save(p)?;
+                }
+                net
+            }
+        };
+        let ps = pairs(room.as_ref(), &scene, &region, args.pairs, seed)?;
+        for (i, pair) in ps.iter().enumerate() {
+            let results = run_pair(
+                &scene,
+                &region,
+                &net,
+                pair,
+                args.big_budget,
+                seed + i as u64,
+            )?;
+            if k == 0 && i == 0 {
+                scene.to_mesh().write(args.out.join("scene.obj"))?;
+                region.write_ply(args.out.join("region.ply"))?;
+                let mut drawn = Vec::new();
+                for (name, _, pts, aligned) in &results {
+                    let line: Vec<Point3<f32>> = pts.iter().map(|&p| point(p)).collect();
+                    if line.len() > 1 {
+                        write_polyline_obj(&line, args.out.join(format!("path_{name}.obj")))?;
+                    }
+                    aligned.write(args.out.join(format!("poses_{name}.json")))?;
+                    drawn.push((*name, pts.clone()));
+                }
+                top_png(&region, &drawn, &args.out.join("top.png"))?;
+            }
+            for (name, o, _, _) in results {
+                all.entry(pair.kind).or_default().push((name, o));
+            }
+            pair_count += 1;
+        }
+    }
+    // Summaries: per planner over all pairs (Table 3), and per kind (Table 4).
+    let mut line = serde_json::json!({"rooms": args.rooms, "pairs": pair_count});
+    let mean = |v: &[f64]| {
+        let f: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
+        (!f.is_empty()).then(|| f.iter().sum::<f64>() / f.len() as f64)
+    };
+    if !args.json {
+        println!("Table 3: {pair_count} pairs in {} room(s)", args.rooms);
+        println!(
+            "{:<12} {:>9} {:>10} {:>11} {:>11}",
+            "planner", "reach %", "dist (m)", "s/path", "path ratio"
+        );
+    }
+    for name in PLANNERS {
+        let os: Vec<&Outcome> = all
+            .values()
+            .flatten()
+            .filter(|(n, _)| *n == name)
+            .map(|(_, o)| o)
+            .collect();
+        let n = os.len().max(1) as f64;
+        let reach = 100.0 * os.iter().filter(|o| o.reached).count() as f64 / n;
+        let dist = mean(&os.iter().map(|o| o.dist_m).collect::<Vec<_>>());
+        let secs = mean(&os.iter().map(|o| o.seconds).collect::<Vec<_>>());
+        let ratio = mean(&os.iter().map(|o| o.path_ratio).collect::<Vec<_>>());
+        let sup = mean(&os.iter().map(|o| o.support).collect::<Vec<_>>());
+        let free = mean(&os.iter().map(|o| o.free).collect::<Vec<_>>());
+        let valid = mean(&os.iter().map(|o| o.valid).collect::<Vec<_>>());
+        line[format!("{name}_reach_pct")] = reach.into();
+        line[format!("{name}_dist_m")] = dist.into();
+        line[format!("{name}_s")] = secs.into();
+        line[format!("{name}_path_ratio")] = ratio.into();
+        line[format!("{name}_support_pct")] = sup.into();
+        line[format!("{name}_free_pct")] = free.into();
+        line[format!("{name}_valid_pct")] = valid.into();
+        if !args.json {
+            println!(
+                "{name:<12} {reach:>9.1} {:>10.3} {:>11.5} {:>11}",
+                dist.unwrap_or(f64::NAN),
+                secs.unwrap_or(f64::NAN),
+                ratio.map_or("-".into(), |r| format!("{r:.3}"))
+            );
+        }
+    }
+    if !args.json {
+        println!("\nTable 4: aligned poses, percent supported / collision-free / valid");
+    }
+    for (kind, results) in &all {
+        let mut per = serde_json::Map::new();
+        for name in PLANNERS {
+            let os: Vec<&Outcome> = results
+                .iter()
+                .filter(|(n, _)| *n == name)
+                .map(|(_, o)| o)
+                .collect();
+            let m = |f: fn(&Outcome) -> f64| mean(&os.iter().map(|o| f(o)).collect::<Vec<_>>());
+            let (s, f, v) = (m(|o| o.support), m(|o| o.free), m(|o| o.valid));
+            if !args.json {
+                println!(
+                    "{kind:<5} {name:<12} {:>6.1} {:>6.1} {:>6.1}  ({} pairs)",
+                    s.unwrap_or(f64::NAN),
+                    f.unwrap_or(f64::NAN),
+                    v.unwrap_or(f64::NAN),
+                    os.len()
+                );
+            }
+            per.insert(name.into(), serde_json::json!({"support_pct": s, "free_pct": f, "valid_pct": v, "pairs": os.len()}));
+        }
+        line[format!("table4_{kind}")] = per.into();
+    }
+    line["field_train_s_per_room"] = mean(&field_s).into();
+    println!("{line}");
+    Ok(())
+}
