@@ -216,7 +216,9 @@ fn one(args: &Args, vae: &Cvae) -> Result<()> {
     // What the drawn samples afford: (first supported pose, first valid pose) counts.
     let mut kinds = std::collections::BTreeMap::<String, usize>::new();
     for a in afford_all(&scene, &samples, &config)? {
-        *kinds.entry(format!("{}:{:?}/{:?}", a.clear, a.supported, a.valid)).or_default() += 1;
+        *kinds
+            .entry(format!("{}:{:?}/{:?}", a.clear, a.supported, a.valid))
+            .or_default() += 1;
     }
     let summary = serde_json::json!({
         "affords_clear_supported_valid": kinds,

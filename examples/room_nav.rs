@@ -17,7 +17,7 @@
 
 use anyhow::{bail, Context, Result};
 use clap::Parser;
-use envfield::affordance::{align_in_scene, walk, AlignConfig, PoseSequence, Support, WalkConfig};
+use envfield::affordance::{walk, PoseSequence, Support, WalkConfig};
 use envfield::grid::{Cell3, ContinuousField3, Point3m, SplitMix64};
 use envfield::nets::FieldNet;
 use envfield::plan::{
@@ -191,40 +191,25 @@ fn pairs(
     Ok(out)
 }
 
-/// The poses of `sequence` fitted to `path` (resampled at the sequence's step unless it is
-/// ours, whose points are the steps): support, collision-free and valid shares, and the poses.
+/// The poses of the pair's sequence along `path` (resampled at the sequence's step unless it
+/// is ours, whose points are the steps), placed as the search places them
+/// (`PoseFilter::poses_along`): support, collision-free and valid shares, and the poses.
 fn fit(
-    scene: &Scene,
-    pair: &Pair,
+    filter: &PoseFilter,
     path: &[Point3m],
     resample: bool,
 ) -> Result<(f64, f64, f64, PoseSequence)> {
-    let pts: Vec<Point3<f32>> = path.iter().map(|&p| point(p)).collect();
-    let step = pair.sequence.step_length().max(1e-3);
-    let traj = if resample && pts.len() > 1 {
+    let step = filter.sequence.step_length().max(1e-3);
+    let traj: Vec<Point3m> = if resample && path.len() > 1 {
+        let pts: Vec<Point3<f32>> = path.iter().map(|&p| point(p)).collect();
         envfield::affordance::resample_path(&pts, step)?
+            .iter()
+            .map(|p| [p.x, p.y, p.z])
+            .collect()
     } else {
-        pts
+        path.to_vec()
     };
-    let cfg = AlignConfig {
-        search_degrees: if pair.repeat { 0.0 } else { 6.0 },
-        ..AlignConfig::default()
-    };
-    let seq = if pair.repeat {
-        pair.sequence.clone()
-    } else {
-        // A sit-down plays once: its frames spread over the trajectory, the last seated.
-        let n = pair.sequence.frames.len();
-        let m = traj.len().max(1);
-        let pick = |i: usize| if m == 1 { n - 1 } else { i * (n - 1) / (m - 1) };
-        PoseSequence::new(
-            pair.sequence.fps,
-            pair.sequence.activity,
-            (0..m).map(|i| pair.sequence.frames[pick(i)]).collect(),
-            (0..m).map(|i| pair.sequence.supports[pick(i)]).collect(),
-        )?
-    };
-    let (aligned, reports) = align_in_scene(scene, &seq, &traj, &cfg)?;
+    let (poses, reports) = filter.poses_along(&traj)?;
     let n = reports.len().max(1) as f64;
     let share = |f: &dyn Fn(&envfield::affordance::AffordanceReport) -> bool| {
         100.0 * reports.iter().filter(|r| f(r)).count() as f64 / n
@@ -233,7 +218,7 @@ fn fit(
         share(&|r| r.supported),
         share(&|r| r.collision_free),
         share(&|r| r.valid()),
-        aligned,
+        poses,
     ))
 }
 
@@ -295,7 +280,7 @@ fn run_pair(
         };
         let seconds = t.elapsed().as_secs_f64();
         let ours = name.starts_with("ours");
-        let (support, free, valid, aligned) = fit(scene, pair, &path.points, !ours)?;
+        let (support, free, valid, aligned) = fit(&poses, &path.points, !ours)?;
         let o = Outcome {
             reached: path.reached,
             dist_m: path.final_distance as f64,

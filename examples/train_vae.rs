@@ -104,7 +104,6 @@ fn main() -> Result<()> {
                 cycles: args.cycles,
                 seed: args.seed,
                 checkpoint_every: args.every,
-                ..VaeTrainConfig::default()
             };
             VaeTrainer::new(Cvae::new(VaeConfig::default(), args.seed)?, config)?
         }

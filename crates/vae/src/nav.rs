@@ -49,8 +49,9 @@ pub struct PoseFilter<'a> {
     pub scene: &'a Scene,
     /// The accessible region.
     pub region: &'a AccessibleRegion,
-    /// The pose sequence; step `k` uses frame `k % len` when `repeat` (a gait cycle), else
-    /// frame `min(k, len - 1)` (a sit-down that ends seated).
+    /// The pose sequence. The path's point `i` (the start is point 0, step `k` lands on point
+    /// `k + 1`) wears frame `i % len` when `repeat` (a gait cycle), else frame
+    /// `min(i, len - 1)` (a sit-down that ends seated), as the alignment places them.
     pub sequence: &'a PoseSequence,
     /// Whether the sequence repeats.
     pub repeat: bool,
@@ -59,6 +60,16 @@ pub struct PoseFilter<'a> {
 }
 
 impl PoseFilter<'_> {
+    /// The frame worn at the point step `step` lands on.
+    fn frame_of(&self, step: usize) -> usize {
+        let (n, i) = (self.sequence.frames.len(), step + 1);
+        if self.repeat {
+            i % n
+        } else {
+            i.min(n - 1)
+        }
+    }
+
     /// Step `step`'s frame placed with its torso at `to`, facing from `from` to `to` (its
     /// own heading when the move is vertical).
     pub fn placed(&self, step: usize, from: Point3m, to: Point3m) -> envfield_affordance::Pose {
@@ -80,6 +91,61 @@ impl PoseFilter<'_> {
         frame
             .rotated_about_z(turn, &torso)
             .translated(&(Point3::new(to[0], to[1], to[2]) - torso))
+    }
+}
+
+impl PoseFilter<'_> {
+    /// The sequence's poses along `path` as the search places them: point `i` wears the frame
+    /// of the step that lands on it, facing that step's move (point 0 faces the first move),
+    /// each checked. Any planner's path gets its poses this way in the tables, so the
+    /// planners differ only in their paths.
+    ///
+    /// # Errors
+    /// [`PlanError::Invalid`] for an empty path; errors of the checks.
+    pub fn poses_along(
+        &self,
+        path: &[Point3m],
+    ) -> envfield_plan::Result<(PoseSequence, Vec<envfield_affordance::AffordanceReport>)> {
+        if path.is_empty() {
+            return Err(PlanError::Invalid("no path to place poses on".into()));
+        }
+        let mut frames = Vec::with_capacity(path.len());
+        let mut supports = Vec::with_capacity(path.len());
+        let mut reports = Vec::with_capacity(path.len());
+        for i in 0..path.len() {
+            let (pose, support) = if i == 0 {
+                let next = path.get(1).copied().unwrap_or(path[0]);
+                // Point 0 wears frame 0: placed as the step "before" the first.
+                let frame = &self.sequence.frames[0];
+                let torso = frame.torso();
+                let facing = frame.facing();
+                let (dx, dy) = (next[0] - path[0][0], next[1] - path[0][1]);
+                let turn = if dx.hypot(dy) > 1e-6 {
+                    dy.atan2(dx) - facing.y.atan2(facing.x)
+                } else {
+                    0.0
+                };
+                let p = frame
+                    .rotated_about_z(turn, &torso)
+                    .translated(&(point(path[0]) - torso));
+                (p, self.sequence.supports[0])
+            } else {
+                let k = i - 1;
+                (
+                    self.placed(k, path[i - 1], path[i]),
+                    self.sequence.supports[self.frame_of(k)],
+                )
+            };
+            reports.push(
+                check_pose(self.scene, &pose, support, &self.affordance)
+                    .map_err(|e| PlanError::Invalid(format!("pose check: {e}")))?,
+            );
+            frames.push(pose);
+            supports.push(support);
+        }
+        let seq = PoseSequence::new(self.sequence.fps, self.sequence.activity, frames, supports)
+            .map_err(|e| PlanError::Invalid(format!("poses: {e}")))?;
+        Ok((seq, reports))
     }
 }
 

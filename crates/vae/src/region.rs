@@ -256,10 +256,19 @@ impl AccessibleRegion {
                     .into(),
             ));
         }
-        let aabb = scene
+        let scene_box = scene
             .aabb()
             .ok_or_else(|| VaeError::InvalidInput("the scene is empty".into()))?;
-        let frame = VoxelFrame::covering(aabb, voxel)?;
+        // The lattice covers the scene and every kept sample, with a voxel to spare.
+        let (mut lo, mut hi) = (scene_box.mins, scene_box.maxs);
+        for p in &kept {
+            for a in 0..3 {
+                lo[a] = lo[a].min(p[a] - voxel);
+                hi[a] = hi[a].max(p[a] + voxel);
+            }
+        }
+        let aabb = envfield_scene::parry3d::bounding_volume::Aabb::new(lo, hi);
+        let frame = VoxelFrame::covering(&aabb, voxel)?;
         let [nx, ny, nz] = frame.shape;
         let mut on = vec![false; nx * ny * nz];
         let index = |c: Cell3| (c.x * ny + c.y) * nz + c.z;
