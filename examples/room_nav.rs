@@ -12,7 +12,8 @@
 //! Walking pairs join two standing places of the accessible region at least a metre apart;
 //! sit-down pairs start where the sit-down sequence starts in front of a seat and end seated.
 //! Writes `scene.obj`, `region.ply`, `path_<planner>.obj`, `poses_<planner>.json` (the first
-//! pair's aligned poses) and `top.png` (every planner's first path over the floor) to `--out`.
+//! pair's aligned poses), `top.png` (every planner's first path over the floor) and `room.png`
+//! (the room ray-cast from above one wall, the paths and five of ours' poses drawn) to `--out`.
 //! The last line is one JSON object (`--json`).
 
 use anyhow::{bail, Context, Result};
@@ -241,7 +242,7 @@ fn run_pair(
     let search = FieldSearch3 {
         step,
         tolerance: 0.02,
-        max_steps: (20.0 * shortest.max(0.5) / step as f64) as usize + 50,
+        max_steps: (200.0 * shortest.max(0.5) / step as f64) as usize + 500,
     };
     let poses = PoseFilter {
         scene,
@@ -338,18 +339,6 @@ fn top_png(region: &AccessibleRegion, paths: &[(&str, Vec<Point3m>)], path: &Pat
             }
         }
     }
-    let colours: BTreeMap<&str, [u8; 3]> = [
-        ("ours", [220, 30, 30]),
-        ("ours_noaff", [250, 150, 30]),
-        ("ours_exact", [30, 160, 60]),
-        ("rrt", [40, 90, 220]),
-        ("rrtstar", [130, 60, 200]),
-        ("rrtstar_big", [200, 80, 200]),
-        ("prm", [20, 170, 190]),
-        ("line", [90, 90, 90]),
-    ]
-    .into_iter()
-    .collect();
     let to_px = |p: Point3m| {
         let x = (p[0] - region.frame.origin.x) / region.frame.voxel * s as f32;
         let y =
@@ -367,7 +356,7 @@ fn top_png(region: &AccessibleRegion, paths: &[(&str, Vec<Point3m>)], path: &Pat
         }
     };
     for (name, pts) in paths {
-        let c = colours.get(name).copied().unwrap_or([0, 0, 0]);
+        let c = planner_colour(name);
         for w in pts.windows(2) {
             let (a, b) = (to_px(w[0]), to_px(w[1]));
             let n = ((b.0 - a.0).hypot(b.1 - a.1)).ceil().max(1.0) as usize;
@@ -395,6 +384,127 @@ fn top_png(region: &AccessibleRegion, paths: &[(&str, Vec<Point3m>)], path: &Pat
     )?;
     envfield::grid::write_atomic(path, &bytes)?;
     Ok(())
+}
+
+/// A picture of the room from above and behind one wall, looking down into it: each pixel one ray cast
+/// with the scene's own ray queries, surfaces shaded by a light from above, coloured by what
+/// they are; every planner's first path and a few of ours' poses drawn where they are not
+/// hidden.
+fn render_png(
+    scene: &Scene,
+    paths: &[(&str, Vec<Point3m>)],
+    skeletons: &[envfield::affordance::Pose],
+    path: &Path,
+) -> Result<()> {
+    use envfield::scene::nalgebra::Vector3;
+    use rayon::prelude::*;
+    let aabb = scene.aabb().context("the scene is empty")?;
+    let (lo, hi) = (aabb.mins, aabb.maxs);
+    let centre = Point3::new((lo.x + hi.x) / 2.0, (lo.y + hi.y) / 2.0 + 0.3, 0.3);
+    // Above and behind the near wall, high enough to see over it into the room.
+    let eye = Point3::new(centre.x, lo.y - 0.8, hi.z + 3.5);
+    let forward = (centre - eye).normalize();
+    let right = forward.cross(&Vector3::z()).normalize();
+    let up = right.cross(&forward);
+    let (w, h) = (640usize, 440usize);
+    let focal = 0.75 * w as f32;
+    let ray = |px: f32, py: f32| {
+        (forward + right * ((px - w as f32 / 2.0) / focal) - up * ((py - h as f32 / 2.0) / focal))
+            .normalize()
+    };
+    let light = Vector3::new(0.3, -0.4, 1.0).normalize();
+    let hits: Vec<(f32, [u8; 3])> = (0..w * h)
+        .into_par_iter()
+        .map(|i| {
+            let d = ray((i % w) as f32 + 0.5, (i / w) as f32 + 0.5);
+            match scene.cast_ray(&eye, &d, 50.0).ok().flatten() {
+                Some(hit) => {
+                    let base: [f32; 3] = match scene.objects()[hit.object].kind {
+                        envfield::scene::ObjectKind::Floor => [0.78, 0.74, 0.68],
+                        envfield::scene::ObjectKind::Wall => [0.86, 0.86, 0.88],
+                        envfield::scene::ObjectKind::Bed => [0.45, 0.55, 0.75],
+                        envfield::scene::ObjectKind::Sofa => [0.65, 0.40, 0.35],
+                        envfield::scene::ObjectKind::Chair => [0.55, 0.45, 0.30],
+                        _ => [0.60, 0.52, 0.42],
+                    };
+                    let shade = 0.35 + 0.65 * hit.normal.dot(&light).abs();
+                    (
+                        hit.distance,
+                        base.map(|c| (255.0 * c * shade).min(255.0) as u8),
+                    )
+                }
+                None => (f32::INFINITY, [30, 30, 36]),
+            }
+        })
+        .collect();
+    let mut img = image::RgbImage::new(w as u32, h as u32);
+    for (i, (_, c)) in hits.iter().enumerate() {
+        img.put_pixel((i % w) as u32, (i / w) as u32, image::Rgb(*c));
+    }
+    // A point's pixel and depth along its ray, when in front of the camera.
+    let project = |p: Point3<f32>| -> Option<(f32, f32, f32)> {
+        let v = p - eye;
+        let z = v.dot(&forward);
+        (z > 0.05).then(|| {
+            (
+                w as f32 / 2.0 + focal * v.dot(&right) / z,
+                h as f32 / 2.0 - focal * v.dot(&up) / z,
+                v.norm(),
+            )
+        })
+    };
+    let segment = |img: &mut image::RgbImage, a: Point3<f32>, b: Point3<f32>, c: [u8; 3]| {
+        let n = 40;
+        for k in 0..=n {
+            let p = a + (b - a) * (k as f32 / n as f32);
+            if let Some((x, y, depth)) = project(p) {
+                let (xi, yi) = (x as i64, y as i64);
+                if xi < 0 || yi < 0 || xi >= w as i64 || yi >= h as i64 {
+                    continue;
+                }
+                if depth <= hits[yi as usize * w + xi as usize].0 + 0.05 {
+                    for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                        let (px, py) = ((xi + dx).min(w as i64 - 1), (yi + dy).min(h as i64 - 1));
+                        img.put_pixel(px as u32, py as u32, image::Rgb(c));
+                    }
+                }
+            }
+        }
+    };
+    for (name, pts) in paths {
+        let c = planner_colour(name);
+        for pair in pts.windows(2) {
+            segment(&mut img, point(pair[0]), point(pair[1]), c);
+        }
+    }
+    for pose in skeletons {
+        for j in envfield::affordance::Joint::ALL {
+            if let Some(parent) = j.parent() {
+                segment(&mut img, pose.joint(j), pose.joint(parent), [20, 20, 20]);
+            }
+        }
+    }
+    let mut bytes = Vec::new();
+    image::DynamicImage::ImageRgb8(img).write_to(
+        &mut std::io::Cursor::new(&mut bytes),
+        image::ImageFormat::Png,
+    )?;
+    envfield::grid::write_atomic(path, &bytes)?;
+    Ok(())
+}
+
+/// Each planner's colour in the pictures.
+fn planner_colour(name: &str) -> [u8; 3] {
+    match name {
+        "ours" => [220, 30, 30],
+        "ours_noaff" => [250, 150, 30],
+        "ours_exact" => [30, 160, 60],
+        "rrt" => [40, 90, 220],
+        "rrtstar" => [130, 60, 200],
+        "rrtstar_big" => [200, 80, 200],
+        "prm" => [20, 170, 190],
+        _ => [90, 90, 90],
+    }
 }
 
 fn main() -> Result<()> {
@@ -489,6 +599,12 @@ fn main() -> Result<()> {
                     drawn.push((*name, pts.clone()));
                 }
                 top_png(&region, &drawn, &args.out.join("top.png"))?;
+                // A few of ours' poses, evenly along its path.
+                let ours = &results[0].3;
+                let skeletons: Vec<_> = (0..5)
+                    .map(|j| ours.frames[j * (ours.frames.len() - 1) / 4])
+                    .collect();
+                render_png(&scene, &drawn, &skeletons, &args.out.join("room.png"))?;
             }
             for (name, o, _, _) in results {
                 all.entry(pair.kind).or_default().push((name, o));

@@ -3,12 +3,14 @@
 //! `{-1, 0, 1}^3 \ {0}`, normalised so every candidate lies exactly `s` away; ask the field at
 //! all candidates in one batch, keep the ones a [`StepFilter`] allows (the pose of this step
 //! supported and collision-free, or simply inside the accessible region), and move to the
-//! smallest value.
+//! smallest value; where the filter leaves no way down, go on from the best point left
+//! (greedy best-first, [`FieldSearch3::search`]).
 
 use crate::{PlanError, Result};
 use envfield_grid::{ContinuousField3, Point3m};
 use serde::{Deserialize, Serialize};
-use std::collections::HashSet;
+use std::cmp::Reverse;
+use std::collections::{BinaryHeap, HashSet};
 
 /// Which candidate torso locations a step may move to.
 pub trait StepFilter {
@@ -90,28 +92,27 @@ pub struct FieldSearch3 {
     pub step: f32,
     /// The search stops when the torso is this close to the goal, metres.
     pub tolerance: f32,
-    /// Steps at most.
+    /// Expansions at most (each one batched field query and one filter call).
     pub max_steps: usize,
 }
 
 impl FieldSearch3 {
     /// Searches from `start` to `goal` on `field`, each step's candidates filtered by
-    /// `filter`. When the goal lies within `s` and the filter allows it, the last step lands
-    /// on it. Farther than `2 s` from the goal a step never returns to a point within `s / 2`
-    /// of one already visited, so the walk cannot cycle there; nearer, it may, so that a
-    /// landing refused for one step's pose is tried again with the next. It ends at the goal,
-    /// at the step budget, or where no candidate is left (then `reached` is false).
+    /// `filter`: greedy best-first on the field's values. Each expansion takes the open point
+    /// of least value, asks the field at its 26 candidates in one batch, and opens those the
+    /// filter allows (a point within `s / 2` of one already opened is not opened again). Where
+    /// the field has no local minimum under the filter this is exactly the paper's descent,
+    /// moving to the smallest candidate at every step; where the filter blocks that descent
+    /// (the pose of the best step would collide), the search goes on from the best point left
+    /// instead of stopping. When the goal lies within `s` and the filter allows it, the path
+    /// lands on it. The path is the chain of steps from the start to the point it ends on:
+    /// the goal, or after `max_steps` expansions the opened point nearest the goal (then
+    /// `reached` is false). A step's filter call gets the step's index along that chain.
     ///
     /// # Errors
     /// [`PlanError::Invalid`] for a step, tolerance or point that is not positive / finite;
     /// errors of the filter.
-    pub fn search<F, S>(
-        &self,
-        field: &F,
-        filter: &S,
-        start: Point3m,
-        goal: Point3m,
-    ) -> Result<Path3>
+    pub fn search<F, S>(&self, field: &F, filter: &S, start: Point3m, goal: Point3m) -> Result<Path3>
     where
         F: ContinuousField3 + ?Sized,
         S: StepFilter + ?Sized,
@@ -129,24 +130,31 @@ impl FieldSearch3 {
         }
         for (what, p) in [("start", start), ("goal", goal)] {
             if !p.iter().all(|v| v.is_finite()) {
-                return Err(PlanError::Invalid(format!(
-                    "3D search: {what} {p:?} is not finite"
-                )));
+                return Err(PlanError::Invalid(format!("3D search: {what} {p:?} is not finite")));
             }
         }
         let dirs = directions26();
         let s = self.step;
         let key = |p: Point3m| p.map(|v| (v / (0.5 * s)).round() as i64);
-        let mut visited = HashSet::from([key(start)]);
-        let mut points = vec![start];
-        let mut here = start;
-        for k in 0..self.max_steps {
+        // Opened points: position, parent, depth (the index along its chain).
+        let mut nodes: Vec<(Point3m, usize, usize)> = vec![(start, usize::MAX, 0)];
+        let mut opened = HashSet::from([key(start)]);
+        let mut open = BinaryHeap::new();
+        let start_value = values_or_infinity(field, &[start])[0];
+        open.push(Reverse((Order(start_value), 0usize)));
+        let mut nearest = (distance(start, goal), 0usize);
+        let mut end = None;
+        for _ in 0..self.max_steps {
+            let Some(Reverse((_, n))) = open.pop() else { break };
+            let (here, _, depth) = nodes[n];
             let d = distance(here, goal);
             if d <= self.tolerance {
+                end = Some(n);
                 break;
             }
-            if d <= s && filter.keep(k, here, &[goal])?[0] {
-                points.push(goal);
+            if d <= s && filter.keep(depth, here, &[goal])?[0] {
+                nodes.push((goal, n, depth + 1));
+                end = Some(nodes.len() - 1);
                 break;
             }
             let candidates: Vec<Point3m> = dirs
@@ -154,23 +162,45 @@ impl FieldSearch3 {
                 .map(|v| [here[0] + s * v[0], here[1] + s * v[1], here[2] + s * v[2]])
                 .collect();
             let values = values_or_infinity(field, &candidates);
-            let keep = filter.keep(k, here, &candidates)?;
-            // Near the goal a refused landing is tried again with the next step's pose, so the
-            // walk may go back and forth there until the budget.
-            let near = d <= 2.0 * s;
-            let best = (0..candidates.len())
-                .filter(|&i| {
-                    keep[i]
-                        && values[i].is_finite()
-                        && (near || !visited.contains(&key(candidates[i])))
-                })
-                .min_by(|&a, &b| values[a].total_cmp(&values[b]));
-            let Some(i) = best else { break };
-            here = candidates[i];
-            visited.insert(key(here));
-            points.push(here);
+            let keep = filter.keep(depth, here, &candidates)?;
+            for (i, c) in candidates.into_iter().enumerate() {
+                if keep[i] && values[i].is_finite() && opened.insert(key(c)) {
+                    nodes.push((c, n, depth + 1));
+                    let id = nodes.len() - 1;
+                    let dc = distance(c, goal);
+                    if dc < nearest.0 {
+                        nearest = (dc, id);
+                    }
+                    open.push(Reverse((Order(values[i]), id)));
+                }
+            }
         }
-        Ok(Path3::ending(points, goal, self.tolerance))
+        let mut chain = Vec::new();
+        let mut at = end.unwrap_or(nearest.1);
+        while at != usize::MAX {
+            chain.push(nodes[at].0);
+            at = nodes[at].1;
+        }
+        chain.reverse();
+        Ok(Path3::ending(chain, goal, self.tolerance))
+    }
+}
+
+/// An f32 ordered by `total_cmp`, for the open list.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Order(f32);
+
+impl Eq for Order {}
+
+impl PartialOrd for Order {
+    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl Ord for Order {
+    fn cmp(&self, other: &Self) -> std::cmp::Ordering {
+        self.0.total_cmp(&other.0)
     }
 }
 
