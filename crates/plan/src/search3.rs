@@ -112,7 +112,13 @@ impl FieldSearch3 {
     /// # Errors
     /// [`PlanError::Invalid`] for a step, tolerance or point that is not positive / finite;
     /// errors of the filter.
-    pub fn search<F, S>(&self, field: &F, filter: &S, start: Point3m, goal: Point3m) -> Result<Path3>
+    pub fn search<F, S>(
+        &self,
+        field: &F,
+        filter: &S,
+        start: Point3m,
+        goal: Point3m,
+    ) -> Result<Path3>
     where
         F: ContinuousField3 + ?Sized,
         S: StepFilter + ?Sized,
@@ -130,7 +136,9 @@ impl FieldSearch3 {
         }
         for (what, p) in [("start", start), ("goal", goal)] {
             if !p.iter().all(|v| v.is_finite()) {
-                return Err(PlanError::Invalid(format!("3D search: {what} {p:?} is not finite")));
+                return Err(PlanError::Invalid(format!(
+                    "3D search: {what} {p:?} is not finite"
+                )));
             }
         }
         let dirs = directions26();
@@ -145,7 +153,9 @@ impl FieldSearch3 {
         let mut nearest = (distance(start, goal), 0usize);
         let mut end = None;
         for _ in 0..self.max_steps {
-            let Some(Reverse((_, n))) = open.pop() else { break };
+            let Some(Reverse((_, n))) = open.pop() else {
+                break;
+            };
             let (here, _, depth) = nodes[n];
             let d = distance(here, goal);
             if d <= self.tolerance {
