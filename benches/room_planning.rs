@@ -1,0 +1,126 @@
+//! Time per trajectory in a 3D room, every planner of `room_nav`'s Table 3 in one run: the
+//! pose-dependent search on the shipped learned field (with and without affordance), PRM (its
+//! roadmap built inside each call), RRT* at 500 and 5000 iterations and RRT, on the accessible
+//! region the shipped VAE gives generated room 10000, for four walking pairs taken in turn.
+//!
+//! `cargo bench --bench room_planning`
+
+// criterion's macros generate undocumented public functions.
+#![allow(missing_docs)]
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
+use envfield::affordance::{walk, Support, WalkConfig};
+use envfield::grid::{ContinuousField3, Point3m};
+use envfield::nets::FieldNet;
+use envfield::plan::{prm, rrt, rrt_star, FieldSearch3, SamplingConfig, StepFilter};
+use envfield::scene::{generate_room, sample_surface, RoomConfig};
+use envfield::vae::{
+    afford, afford_all, AccessibleRegion, Cvae, ExactField3, LearnedField3, PoseFilter,
+    RegionConfig,
+};
+use std::hint::black_box;
+use std::path::Path;
+
+#[global_allocator]
+static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
+fn bench_rooms(c: &mut Criterion) {
+    let models = Path::new(env!("CARGO_MANIFEST_DIR")).join("models");
+    let vae = Cvae::load(models.join("vae.safetensors")).expect("the shipped VAE");
+    let net =
+        FieldNet::load(models.join("room_field_10000.safetensors")).expect("the shipped field");
+    let seed = 10_000;
+    let room = generate_room(&RoomConfig::default(), seed).expect("room");
+    // The region exactly as room_nav makes it.
+    let cloud: Vec<[f32; 3]> = sample_surface(&room.scene, vae.config().points, seed)
+        .expect("cloud")
+        .iter()
+        .map(|p| [p.x, p.y, p.z])
+        .collect();
+    let drawn = vae.sample(&cloud, 6000, seed).expect("samples");
+    let config = RegionConfig::default();
+    let kept = drawn
+        .iter()
+        .zip(afford_all(&room.scene, &drawn, &config).expect("filter"))
+        .filter(|(_, a)| a.kept())
+        .map(|(s, _)| *s)
+        .collect();
+    let region = AccessibleRegion::from_samples(&room.scene, kept, config.voxel).expect("region");
+    let standing: Vec<Point3m> = region
+        .samples
+        .iter()
+        .copied()
+        .filter(|&s| region.contains(s))
+        .filter(|&s| {
+            afford(&room.scene, s, &config).is_ok_and(|a| a.valid == Some(Support::Standing))
+        })
+        .collect();
+    let gait = walk(&WalkConfig::default(), seed).expect("gait");
+    let step = gait.step_length();
+    // Four pairs at least 2 m apart that every planner reaches.
+    let mut pairs = Vec::new();
+    let mut k = 0;
+    while pairs.len() < 4 && k < standing.len() * standing.len() {
+        let (a, b) = (
+            standing[k % standing.len()],
+            standing[(k * 7919 + 13) % standing.len()],
+        );
+        k += 1;
+        let exact = ExactField3::new(&region, b).expect("field");
+        if exact.value(a).is_ok_and(|d| d.is_finite() && d > 2.0) {
+            pairs.push((a, b, region.cell(b, "goal").expect("goal")));
+        }
+    }
+    let search = FieldSearch3 {
+        step,
+        tolerance: 0.02,
+        max_steps: 20_000,
+    };
+    let poses = PoseFilter {
+        scene: &room.scene,
+        region: &region,
+        sequence: &gait,
+        repeat: true,
+        affordance: Default::default(),
+    };
+    let sampling = SamplingConfig {
+        step: step.max(0.05),
+        ..SamplingConfig::default()
+    };
+    let mut group = c.benchmark_group("room_planning");
+    group.sample_size(10);
+    let names = ["ours", "ours_noaff", "prm", "rrtstar", "rrtstar_big", "rrt"];
+    for name in names {
+        group.bench_function(BenchmarkId::new(name, pairs.len()), |b| {
+            let mut i = 0;
+            b.iter(|| {
+                let (start, goal, cell) = pairs[i % pairs.len()];
+                i += 1;
+                let learned = LearnedField3::new(&net, &region, cell).expect("learned");
+                let path = match name {
+                    "ours" => search.search(&learned, &poses, start, goal),
+                    "ours_noaff" => {
+                        search.search(&learned, &region as &dyn StepFilter, start, goal)
+                    }
+                    "prm" => prm(&region, start, goal, &sampling),
+                    "rrtstar" => rrt_star(&region, start, goal, &sampling),
+                    "rrtstar_big" => rrt_star(
+                        &region,
+                        start,
+                        goal,
+                        &SamplingConfig {
+                            budget: 5000,
+                            ..sampling
+                        },
+                    ),
+                    _ => rrt(&region, start, goal, &sampling),
+                };
+                black_box(path.expect("plan"))
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench_rooms);
+criterion_main!(benches);
