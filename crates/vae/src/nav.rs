@@ -49,9 +49,9 @@ pub struct PoseFilter<'a> {
     pub scene: &'a Scene,
     /// The accessible region.
     pub region: &'a AccessibleRegion,
-    /// The pose sequence. The path's point `i` (the start is point 0, step `k` lands on point
-    /// `k + 1`) wears frame `i % len` when `repeat` (a gait cycle), else frame
-    /// `min(i, len - 1)` (a sit-down that ends seated), as the alignment places them.
+    /// The pose sequence. Step `k` (it lands on the path's point `k + 1`; the start, point 0,
+    /// wears frame 0 too) wears frame `k % len` when `repeat` (a gait cycle), else frame
+    /// `min(k, len - 1)` (a sit-down that ends seated).
     pub sequence: &'a PoseSequence,
     /// Whether the sequence repeats.
     pub repeat: bool,
@@ -60,26 +60,20 @@ pub struct PoseFilter<'a> {
 }
 
 impl PoseFilter<'_> {
-    /// The frame worn at the point step `step` lands on.
+    /// The frame step `step` wears on the point it lands on.
     fn frame_of(&self, step: usize) -> usize {
-        let (n, i) = (self.sequence.frames.len(), step + 1);
+        let n = self.sequence.frames.len();
         if self.repeat {
-            i % n
+            step % n
         } else {
-            i.min(n - 1)
+            step.min(n - 1)
         }
     }
 
     /// Step `step`'s frame placed with its torso at `to`, facing from `from` to `to` (its
     /// own heading when the move is vertical).
     pub fn placed(&self, step: usize, from: Point3m, to: Point3m) -> envfield_affordance::Pose {
-        let n = self.sequence.frames.len();
-        let k = if self.repeat {
-            step % n
-        } else {
-            step.min(n - 1)
-        };
-        let frame = &self.sequence.frames[k];
+        let frame = &self.sequence.frames[self.frame_of(step)];
         let torso = frame.torso();
         let facing = frame.facing();
         let (dx, dy) = (to[0] - from[0], to[1] - from[1]);
@@ -156,14 +150,7 @@ impl StepFilter for PoseFilter<'_> {
         from: Point3m,
         candidates: &[Point3m],
     ) -> envfield_plan::Result<Vec<bool>> {
-        let support = {
-            let n = self.sequence.supports.len();
-            self.sequence.supports[if self.repeat {
-                step % n
-            } else {
-                step.min(n - 1)
-            }]
-        };
+        let support = self.sequence.supports[self.frame_of(step)];
         candidates
             .iter()
             .map(|&c| {
