@@ -15,8 +15,7 @@ use envfield::nets::FieldNet;
 use envfield::plan::{prm, rrt, rrt_star, FieldSearch3, SamplingConfig, StepFilter};
 use envfield::scene::{generate_room, sample_surface, RoomConfig};
 use envfield::vae::{
-    afford, afford_all, AccessibleRegion, Cvae, ExactField3, LearnedField3, PoseFilter,
-    RegionConfig,
+    afford, AccessibleRegion, Cvae, ExactField3, LearnedField3, PoseFilter, RegionConfig,
 };
 use std::hint::black_box;
 use std::path::Path;
@@ -39,13 +38,7 @@ fn bench_rooms(c: &mut Criterion) {
         .collect();
     let drawn = vae.sample(&cloud, 6000, seed).expect("samples");
     let config = RegionConfig::default();
-    let kept = drawn
-        .iter()
-        .zip(afford_all(&room.scene, &drawn, &config).expect("filter"))
-        .filter(|(_, a)| a.kept())
-        .map(|(s, _)| *s)
-        .collect();
-    let region = AccessibleRegion::from_samples(&room.scene, kept, config.voxel).expect("region");
+    let region = AccessibleRegion::from_drawn(&room.scene, &drawn, &config).expect("region");
     let standing: Vec<Point3m> = region
         .samples
         .iter()

@@ -123,22 +123,6 @@ fn progress(len: u64, what: &str) -> Result<ProgressBar> {
     Ok(bar)
 }
 
-/// The region of `samples` in `scene` (filtered), or the filter's error.
-fn region_of(
-    scene: &Scene,
-    samples: &[[f32; 3]],
-    config: &RegionConfig,
-) -> Result<AccessibleRegion> {
-    let affords = afford_all(scene, samples, config)?;
-    let kept = samples
-        .iter()
-        .zip(&affords)
-        .filter(|(_, a)| a.kept())
-        .map(|(s, _)| *s)
-        .collect();
-    Ok(AccessibleRegion::from_samples(scene, kept, config.voxel)?)
-}
-
 /// A goal for the pictures: the kept sample nearest the region's middle.
 fn middle_goal(region: &AccessibleRegion) -> [f32; 3] {
     let n = region.samples.len() as f32;
@@ -173,7 +157,7 @@ fn one(args: &Args, vae: &Cvae) -> Result<()> {
     let sample_ms = t.elapsed().as_secs_f64() * 1e3;
     let config = region_config(args);
     let t = Instant::now();
-    let region = region_of(&scene, &samples, &config)?;
+    let region = AccessibleRegion::from_drawn(&scene, &samples, &config)?;
     let region_ms = t.elapsed().as_secs_f64() * 1e3;
     let kept: Vec<_> = region
         .samples
@@ -282,7 +266,7 @@ fn many(args: &Args, vae: &Cvae, rooms: u64) -> Result<()> {
         let box_samples = uniform_in_room(&room, 2.5, args.samples, seed);
         uniform.push(region_quality(&room, &box_samples, &config)?);
         if !args.no_field && k < args.field_rooms {
-            let region = region_of(&room.scene, &samples, &config)?;
+            let region = AccessibleRegion::from_drawn(&room.scene, &samples, &config)?;
             let cfg = Field3Config {
                 steps: args.field_steps,
                 seed,

@@ -29,8 +29,8 @@ use envfield::scene::{
     generate_room, sample_surface, write_polyline_obj, Room, RoomConfig, Scene, TriangleMesh,
 };
 use envfield::vae::{
-    afford, afford_all, point, sit_on, train_field3, AccessibleRegion, Cvae, ExactField3,
-    Field3Config, LearnedField3, PoseFilter, RegionConfig,
+    afford, point, sit_on, train_field3, AccessibleRegion, Cvae, ExactField3, Field3Config,
+    LearnedField3, PoseFilter, RegionConfig,
 };
 use indicatif::{ProgressBar, ProgressStyle};
 use std::collections::BTreeMap;
@@ -306,15 +306,11 @@ fn region_of(vae: &Cvae, scene: &Scene, samples: usize, seed: u64) -> Result<Acc
         .map(|p| [p.x, p.y, p.z])
         .collect();
     let drawn = vae.sample(&cloud, samples, seed)?;
-    let config = RegionConfig::default();
-    let affords = afford_all(scene, &drawn, &config)?;
-    let kept = drawn
-        .iter()
-        .zip(&affords)
-        .filter(|(_, a)| a.kept())
-        .map(|(s, _)| *s)
-        .collect();
-    Ok(AccessibleRegion::from_samples(scene, kept, config.voxel)?)
+    Ok(AccessibleRegion::from_drawn(
+        scene,
+        &drawn,
+        &RegionConfig::default(),
+    )?)
 }
 
 /// A top-down picture: accessible columns light, the rest dark, every planner's path in its

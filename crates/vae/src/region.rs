@@ -243,6 +243,23 @@ impl AccessibleRegion {
         })
     }
 
+    /// The region of drawn torso `samples` in `scene`: the filter ([`afford_all`], keeping
+    /// what [`Afford::kept`] keeps), then [`AccessibleRegion::from_samples`] at the config's
+    /// voxel.
+    ///
+    /// # Errors
+    /// As [`afford_all`] and [`AccessibleRegion::from_samples`].
+    pub fn from_drawn(scene: &Scene, samples: &[[f32; 3]], config: &RegionConfig) -> Result<Self> {
+        let affords = afford_all(scene, samples, config)?;
+        let kept = samples
+            .iter()
+            .zip(&affords)
+            .filter(|(_, a)| a.kept())
+            .map(|(s, _)| *s)
+            .collect();
+        Self::from_samples(scene, kept, config.voxel)
+    }
+
     /// The region of `kept` samples (already filtered) on a lattice covering `scene`.
     ///
     /// # Errors

@@ -211,6 +211,23 @@ impl FieldNet {
     /// [`NetsError::InvalidInput`] for a network without a shortest-path readout or a grid
     /// of more than [`MAX_FIELD_CELLS`] cells.
     pub fn move_costs(&self, grid: &Grid2) -> Result<Vec<[f32; 8]>> {
+        if grid.len() > MAX_FIELD_CELLS {
+            return Err(NetsError::InvalidInput(format!(
+                "a {}x{} grid is more than {MAX_FIELD_CELLS} cells",
+                grid.rows(),
+                grid.cols()
+            )));
+        }
+        let costs = self.flat_costs(grid)?;
+        Ok(costs
+            .chunks_exact(MOVES)
+            .map(|m| std::array::from_fn(|k| m[k]))
+            .collect())
+    }
+
+    /// The move costs of `grid`, `cells * 8` values, through the inference path (no
+    /// gradients): what [`FieldNet::move_costs`] and the whole-field prediction share.
+    fn flat_costs(&self, grid: &Grid2) -> Result<Vec<f32>> {
         let (
             Net::Context {
                 encoder,
@@ -225,41 +242,17 @@ impl FieldNet {
                 self.config.arch()
             )));
         };
-        if grid.len() > MAX_FIELD_CELLS {
-            return Err(NetsError::InvalidInput(format!(
-                "a {}x{} grid is more than {MAX_FIELD_CELLS} cells",
-                grid.rows(),
-                grid.cols()
-            )));
-        }
-        let batch = Batch::points(grid, Cell2::new(0, 0), &[]);
-        let input = self.grid_input(&batch, c.goal_channel)?;
+        // The costs do not depend on the goal (no goal channel), so any cell serves.
+        let input = self.grid_input(&Batch::points(grid, Cell2::new(0, 0), &[]), c.goal_channel)?;
         let features = encoder.forward_inference(&input)?;
-        let costs = layer.costs(&features)?.flatten_all()?.to_vec1::<f32>()?;
-        Ok(costs
-            .chunks_exact(MOVES)
-            .map(|m| std::array::from_fn(|k| m[k]))
-            .collect())
+        Ok(layer.costs(&features)?.flatten_all()?.to_vec1::<f32>()?)
     }
 
     /// The field of a network with a shortest-path readout: the encoder and the costs without
     /// gradients, then one Dijkstra pass; cells the goal does not reach are infinite.
     fn path_field(&self, grid: &Grid2, goal: Cell2) -> Result<Field2> {
-        let (
-            Net::Context {
-                encoder,
-                path: Some(layer),
-                ..
-            },
-            ModelConfig::Context(c),
-        ) = (&self.net, &self.config)
-        else {
-            unreachable!("only called for shortest-path readouts")
-        };
+        let costs = self.flat_costs(grid)?;
         let batch = Batch::points(grid, goal, &[]);
-        let input = self.grid_input(&batch, c.goal_channel)?;
-        let features = encoder.forward_inference(&input)?;
-        let costs = layer.costs(&features)?.flatten_all()?.to_vec1::<f32>()?;
         debug_assert_eq!(costs.len(), grid.len() * MOVES);
         let problem = self.min_plus(&batch);
         let solved = problem.solve(0, &costs);
