@@ -373,13 +373,7 @@ fn top_png(region: &AccessibleRegion, paths: &[(&str, Vec<Point3m>)], path: &Pat
             dot(&mut img, to_px(b), 4, [220, 30, 220]);
         }
     }
-    let mut bytes = Vec::new();
-    image::DynamicImage::ImageRgb8(img).write_to(
-        &mut std::io::Cursor::new(&mut bytes),
-        image::ImageFormat::Png,
-    )?;
-    envfield::grid::write_atomic(path, &bytes)?;
-    Ok(())
+    write_png(img, path)
 }
 
 /// A picture of the room from above and behind one wall, looking down into it: each pixel one ray cast
@@ -480,6 +474,11 @@ fn render_png(
             }
         }
     }
+    write_png(img, path)
+}
+
+/// Encodes `img` as PNG and writes it atomically.
+fn write_png(img: image::RgbImage, path: &Path) -> Result<()> {
     let mut bytes = Vec::new();
     image::DynamicImage::ImageRgb8(img).write_to(
         &mut std::io::Cursor::new(&mut bytes),
