@@ -339,6 +339,10 @@ impl FieldModel for FastMarching {
     fn predict(&self, grid: &Grid2, goal: Cell2) -> envfield_grid::Result<Field2> {
         Ok(self.solve2(grid, &[goal])?)
     }
+
+    fn predict_many(&self, problems: &[(&Grid2, Cell2)]) -> envfield_grid::Result<Vec<Field2>> {
+        Ok(self.solve2_batch(problems)?)
+    }
 }
 
 #[cfg(test)]

@@ -19,6 +19,19 @@ pub trait FieldModel {
     /// When the goal is outside the grid or on an obstacle, when the grid is a size the model
     /// does not accept, or when the model itself fails ([`crate::GridError::Model`]).
     fn predict(&self, grid: &Grid2, goal: Cell2) -> Result<Field2>;
+
+    /// The fields of many `(grid, goal)` problems, in order. The default answers them one by
+    /// one; a network answers same-sized grids in one batched pass and the exact solvers in
+    /// parallel, which is what a step of several people on their own changed maps needs.
+    ///
+    /// # Errors
+    /// The first error of any problem, as [`FieldModel::predict`].
+    fn predict_many(&self, problems: &[(&Grid2, Cell2)]) -> Result<Vec<Field2>> {
+        problems
+            .iter()
+            .map(|&(grid, goal)| self.predict(grid, goal))
+            .collect()
+    }
 }
 
 /// A continuous reaching-distance field on one grid with one goal, for queries at arbitrary
@@ -112,6 +125,10 @@ impl<M: FieldModel + ?Sized> FieldModel for Box<M> {
     fn predict(&self, grid: &Grid2, goal: Cell2) -> Result<Field2> {
         (**self).predict(grid, goal)
     }
+
+    fn predict_many(&self, problems: &[(&Grid2, Cell2)]) -> Result<Vec<Field2>> {
+        (**self).predict_many(problems)
+    }
 }
 
 impl<M: FieldModel + ?Sized> FieldModel for &M {
@@ -121,5 +138,9 @@ impl<M: FieldModel + ?Sized> FieldModel for &M {
 
     fn predict(&self, grid: &Grid2, goal: Cell2) -> Result<Field2> {
         (**self).predict(grid, goal)
+    }
+
+    fn predict_many(&self, problems: &[(&Grid2, Cell2)]) -> Result<Vec<Field2>> {
+        (**self).predict_many(problems)
     }
 }

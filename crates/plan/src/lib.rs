@@ -18,6 +18,9 @@
 //! - [`FieldSearch3`]: the pose-dependent search on a continuous 3D field (paper section 4.2),
 //!   each step's 26 candidates asked in one batch and filtered by a [`StepFilter`]; and the
 //!   sampling baselines [`rrt`], [`rrt_star`] and [`prm`] on any [`Space3`].
+//! - [`walk_crowd`]: several people on one floor map at once (paper Algorithm 1), each
+//!   person's field on the map the others change, one batched prediction per time step; and
+//!   [`orca_crowd`], the ORCA crowd loop beside it.
 //! - [`PlannerKind`]: planners by name (`field`, `relay`, `octile`, `fmm`, `astar`, ...), the
 //!   names the examples and benchmarks take.
 //!
@@ -37,6 +40,7 @@
 //! ```
 
 mod astar;
+mod crowd;
 mod descent;
 mod error;
 mod gradient;
@@ -50,6 +54,10 @@ mod sampling;
 mod search3;
 
 pub use astar::{AStar, Octile};
+pub use crowd::{
+    check_trips, closest_approach, orca_crowd, shortest_lengths, walk_crowd, CrowdConfig, CrowdRun,
+    OrcaConfig, Trip,
+};
 pub use descent::{descend, FieldDescent};
 pub use error::{PlanError, Result};
 pub use gradient::{gradient_descent, ContinuousPath, GradientDescentConfig};

@@ -18,6 +18,7 @@ use context::Propagation;
 use envfield_grid::{Cell2, Field2, FieldModel, Grid2, GridError, MoveRule};
 use hyper::Hyper;
 use path::{MinPlus, PathLayer, MOVES};
+use rayon::prelude::*;
 
 #[derive(Debug)]
 enum Net {
@@ -218,16 +219,17 @@ impl FieldNet {
                 grid.cols()
             )));
         }
-        let costs = self.flat_costs(grid)?;
+        let costs = self.flat_costs(&[grid])?;
         Ok(costs
             .chunks_exact(MOVES)
             .map(|m| std::array::from_fn(|k| m[k]))
             .collect())
     }
 
-    /// The move costs of `grid`, `cells * 8` values, through the inference path (no
-    /// gradients): what [`FieldNet::move_costs`] and the whole-field prediction share.
-    fn flat_costs(&self, grid: &Grid2) -> Result<Vec<f32>> {
+    /// The move costs of `grids` (all of one size), `grids * cells * 8` values, through the
+    /// inference path (no gradients) and one encoder pass: what [`FieldNet::move_costs`] and
+    /// the whole-field predictions share.
+    fn flat_costs(&self, grids: &[&Grid2]) -> Result<Vec<f32>> {
         let (
             Net::Context {
                 encoder,
@@ -242,32 +244,69 @@ impl FieldNet {
                 self.config.arch()
             )));
         };
+        let Some(first) = grids.first() else {
+            return Ok(Vec::new());
+        };
         // The costs do not depend on the goal (no goal channel), so any cell serves.
-        let input = self.grid_input(&Batch::points(grid, Cell2::new(0, 0), &[]), c.goal_channel)?;
+        let batch = Batch {
+            extent: vec![first.rows(), first.cols()],
+            items: grids.len(),
+            obstacles: grids
+                .iter()
+                .flat_map(|g| g.obstacles().iter().map(|&o| o as u8 as f32))
+                .collect(),
+            goals: vec![0.0; 2 * grids.len()],
+            per_item: 0,
+            queries: Vec::new(),
+        };
+        let input = self.grid_input(&batch, c.goal_channel)?;
         let features = encoder.forward_inference(&input)?;
         Ok(layer.costs(&features)?.flatten_all()?.to_vec1::<f32>()?)
     }
 
-    /// The field of a network with a shortest-path readout: the encoder and the costs without
-    /// gradients, then one Dijkstra pass; cells the goal does not reach are infinite.
-    fn path_field(&self, grid: &Grid2, goal: Cell2) -> Result<Field2> {
-        let costs = self.flat_costs(grid)?;
-        let batch = Batch::points(grid, goal, &[]);
-        debug_assert_eq!(costs.len(), grid.len() * MOVES);
-        let problem = self.min_plus(&batch);
-        let solved = problem.solve(0, &costs);
-        let goal_index = goal.row * grid.cols() + goal.col;
-        let values = solved
-            .values
-            .iter()
-            .zip(&solved.first_move)
-            .enumerate()
-            .map(|(i, (&v, &m))| match m != u8::MAX || i == goal_index {
-                true => v,
-                false => f32::INFINITY,
+    /// The fields of a network with a shortest-path readout for same-sized `problems`: the
+    /// encoder and the costs without gradients in one pass, then one Dijkstra pass per
+    /// problem (in parallel); cells the goal does not reach are infinite.
+    fn path_fields(&self, problems: &[(&Grid2, Cell2)]) -> Result<Vec<Field2>> {
+        let grids: Vec<&Grid2> = problems.iter().map(|&(g, _)| g).collect();
+        let costs = self.flat_costs(&grids)?;
+        let Some(&(first, _)) = problems.first() else {
+            return Ok(Vec::new());
+        };
+        let (rows, cols) = (first.rows(), first.cols());
+        let n = rows * cols;
+        debug_assert_eq!(costs.len(), problems.len() * n * MOVES);
+        let problem = MinPlus {
+            rows,
+            cols,
+            free: grids
+                .iter()
+                .flat_map(|g| g.obstacles().iter().map(|&o| !o))
+                .collect(),
+            goals: problems
+                .iter()
+                .map(|&(_, goal)| goal.row * cols + goal.col)
+                .collect(),
+            rule: self.rule,
+        };
+        (0..problems.len())
+            .into_par_iter()
+            .map(|b| {
+                let solved = problem.solve(b, &costs[b * n * MOVES..(b + 1) * n * MOVES]);
+                let goal_index = problem.goals[b];
+                let values = solved
+                    .values
+                    .iter()
+                    .zip(&solved.first_move)
+                    .enumerate()
+                    .map(|(i, (&v, &m))| match m != u8::MAX || i == goal_index {
+                        true => v,
+                        false => f32::INFINITY,
+                    })
+                    .collect();
+                Ok(Field2::new(rows, cols, values)?)
             })
-            .collect();
-        Ok(Field2::new(grid.rows(), grid.cols(), values)?)
+            .collect()
     }
 
     /// The network's config.
@@ -515,7 +554,8 @@ impl FieldNet {
             )));
         }
         if self.has_path_readout() {
-            return self.path_field(grid, goal);
+            let mut fields = self.path_fields(&[(grid, goal)])?;
+            return Ok(fields.remove(0));
         }
         let raw = self.predict_encoded(&Batch::free_cells(grid, goal))?;
         let encoding = self.config.encoding();
@@ -529,6 +569,44 @@ impl FieldNet {
             })
             .collect();
         Ok(Field2::new(grid.rows(), grid.cols(), values)?)
+    }
+
+    /// The fields of many `(grid, goal)` problems, in order. For a network with a
+    /// shortest-path readout and grids of one size this is one encoder pass over all the
+    /// grids and one Dijkstra pass per problem, in parallel; otherwise one
+    /// [`FieldNet::field`] per problem.
+    ///
+    /// # Errors
+    /// As [`FieldNet::field`], for the first bad problem.
+    pub fn fields(&self, problems: &[(&Grid2, Cell2)]) -> Result<Vec<Field2>> {
+        let Some(&(first, _)) = problems.first() else {
+            return Ok(Vec::new());
+        };
+        let same_size = problems
+            .iter()
+            .all(|(g, _)| (g.rows(), g.cols()) == (first.rows(), first.cols()));
+        if !(self.has_path_readout() && same_size) {
+            return problems
+                .iter()
+                .map(|&(g, goal)| self.field(g, goal))
+                .collect();
+        }
+        for &(grid, goal) in problems {
+            grid.check_free(goal, "goal")?;
+            self.check_scene(grid, goal)?;
+        }
+        // The encoder's features of every grid are held at once.
+        if first.len().saturating_mul(problems.len()) > MAX_FIELD_CELLS {
+            return problems
+                .chunks((MAX_FIELD_CELLS / first.len().max(1)).max(1))
+                .map(|chunk| match chunk.len() {
+                    1 => self.field(chunk[0].0, chunk[0].1).map(|f| vec![f]),
+                    _ => self.path_fields(chunk),
+                })
+                .collect::<Result<Vec<_>>>()
+                .map(|v| v.into_iter().flatten().collect());
+        }
+        self.path_fields(problems)
     }
 
     /// A continuous view of the field of `grid` for `goal` (values and gradients at any point).
@@ -572,6 +650,11 @@ impl FieldModel for FieldNet {
 
     fn predict(&self, grid: &Grid2, goal: Cell2) -> envfield_grid::Result<Field2> {
         self.field(grid, goal)
+            .map_err(|e| model_error(self.name(), e))
+    }
+
+    fn predict_many(&self, problems: &[(&Grid2, Cell2)]) -> envfield_grid::Result<Vec<Field2>> {
+        self.fields(problems)
             .map_err(|e| model_error(self.name(), e))
     }
 }

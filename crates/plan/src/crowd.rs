@@ -1,0 +1,650 @@
+//! Several people walking through one floor map at once (paper section 4.1 and its Algorithm
+//! 1), and the ORCA crowd loop (van den Berg et al. 2011) to set beside it.
+//!
+//! Everything is in cell units of the *walkable* map: the floor map with its obstacles grown by
+//! the body radius, so a free cell is a place a person's centre may stand. People are discs of
+//! [`CrowdConfig::body_radius`] around their centres.
+//!
+//! One time step of [`walk_crowd`] (Algorithm 1):
+//! 1. for every person still walking, the map with the others' discs (twice the body radius
+//!    around their centres) marked as obstacles, and its field for that person's goal; all of
+//!    them in one [`FieldModel::predict_many`] call (one batched forward pass for a network);
+//! 2. people whose goal the others cut off are *blocked*. Priority goes to the smaller
+//!    remaining distance (the model's own field value; ties to the lower index). A blocked
+//!    person plans again on the map with only the discs of people ahead of them in priority
+//!    (a second batched call): the highest-priority person always has a way, and the others
+//!    step out of it;
+//! 3. in priority order, each person takes the step among 8 directions (step length, half of
+//!    it, one cell) that lowers their field most, with the swept step clear of the map and,
+//!    in continuous time, of every other person's motion this step. A person with no way
+//!    yields: the step that most increases their distance from the nearest person ahead of
+//!    them in priority. A person with no safe step waits.
+//!
+//! People who reach their goal leave the map (they are no longer anyone's obstacle), in both
+//! loops alike.
+
+use std::borrow::Cow;
+
+use dodgy_2d::{Agent, AvoidanceOptions, Obstacle, Vec2};
+use envfield_eikonal::{FastMarching, Order};
+use envfield_grid::{Cell2, Field2, FieldModel, Grid2, Point2};
+use serde::{Deserialize, Serialize};
+
+use crate::{PlanError, Result};
+
+/// How people walk, in cells of the walkable map.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CrowdConfig {
+    /// Radius of a person's disc.
+    pub body_radius: f32,
+    /// Length of one step (one time step).
+    pub step_length: f32,
+    /// Time steps before the loop gives up on the people still walking.
+    pub max_steps: usize,
+}
+
+impl Default for CrowdConfig {
+    /// A 0.25 m body and a 0.5 m step on a 0.1 m map, 400 steps (200 s at a step a half
+    /// second).
+    fn default() -> Self {
+        Self {
+            body_radius: 2.5,
+            step_length: 5.0,
+            max_steps: 400,
+        }
+    }
+}
+
+impl CrowdConfig {
+    fn validate(&self) -> Result<()> {
+        let positive = |v: f32| v.is_finite() && v > 0.0;
+        if !(positive(self.body_radius) && self.step_length.is_finite() && self.step_length >= 1.0)
+            || self.max_steps == 0
+        {
+            return Err(PlanError::Invalid(format!(
+                "crowd config: body radius > 0, step length >= 1 cell and max_steps >= 1 \
+                 (got {}, {}, {})",
+                self.body_radius, self.step_length, self.max_steps
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// One person's start and goal.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Trip {
+    /// Where the person stands at time 0.
+    pub start: Cell2,
+    /// Where they walk to.
+    pub goal: Cell2,
+}
+
+/// What a crowd loop did: everyone's position at every time step.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CrowdRun {
+    /// `frames[t][i]`: person `i` at time step `t` (frame 0 holds the starts). After their
+    /// arrival a person stays at their goal in the frames but is no longer on the map.
+    pub frames: Vec<Vec<Point2>>,
+    /// The time step each person reached their goal at, `None` for those who did not.
+    pub arrived_at: Vec<Option<usize>>,
+    /// Person-steps spent waiting (no safe step).
+    pub waits: usize,
+    /// Person-steps spent yielding (stepping out of a higher-priority person's way).
+    pub yields: usize,
+}
+
+impl CrowdRun {
+    /// Number of people.
+    pub fn people(&self) -> usize {
+        self.arrived_at.len()
+    }
+
+    /// Time steps taken.
+    pub fn steps(&self) -> usize {
+        self.frames.len().saturating_sub(1)
+    }
+
+    /// Whether person `i` is on the map during the step from frame `t` to `t + 1`.
+    fn walking(&self, i: usize, t: usize) -> bool {
+        self.arrived_at[i].is_none_or(|a| t < a)
+    }
+
+    /// Person `i`'s positions up to their arrival (or the last frame), waits included.
+    pub fn path(&self, i: usize) -> Vec<Point2> {
+        let end = self.arrived_at[i].unwrap_or(self.steps());
+        self.frames[..=end].iter().map(|f| f[i]).collect()
+    }
+
+    /// Length of person `i`'s path in cells.
+    pub fn path_length(&self, i: usize) -> f32 {
+        self.path(i).windows(2).map(|w| w[0].distance(w[1])).sum()
+    }
+
+    /// Pairs of people closer than twice `body_radius` at some moment, counted once per pair
+    /// and time step, with both moving in straight lines between frames.
+    pub fn person_collisions(&self, body_radius: f32) -> usize {
+        let n = self.people();
+        let mut count = 0;
+        for t in 0..self.steps() {
+            let (now, next) = (&self.frames[t], &self.frames[t + 1]);
+            for i in 0..n {
+                for j in i + 1..n {
+                    if self.walking(i, t)
+                        && self.walking(j, t)
+                        && closest_approach(now[i], next[i], now[j], next[j])
+                            < 2.0 * body_radius - 1e-3
+                    {
+                        count += 1;
+                    }
+                }
+            }
+        }
+        count
+    }
+
+    /// Person-steps whose swept step (sampled every quarter cell) enters a cell that
+    /// `walkable` blocks, that is where the body would overlap the floor map's obstacles.
+    pub fn obstacle_collisions(&self, walkable: &Grid2) -> usize {
+        (0..self.steps())
+            .map(|t| {
+                (0..self.people())
+                    .filter(|&i| {
+                        self.walking(i, t)
+                            && !segment_clear(walkable, self.frames[t][i], self.frames[t + 1][i])
+                    })
+                    .count()
+            })
+            .sum()
+    }
+}
+
+/// Checks a crowd problem: every start and goal on a free cell of `walkable`, starts at least
+/// twice the body radius apart, no more people than fit on the free floor, and every goal
+/// reachable from its start on the empty map.
+///
+/// # Errors
+/// [`PlanError::Invalid`] naming the person and what is wrong.
+pub fn check_trips(walkable: &Grid2, trips: &[Trip], config: &CrowdConfig) -> Result<()> {
+    config.validate()?;
+    if trips.is_empty() {
+        return Err(PlanError::Invalid(
+            "a crowd needs at least one person".into(),
+        ));
+    }
+    // Discs of diameter 2r packed in squares: a generous bound on how many fit.
+    let side = 2.0 * config.body_radius;
+    let capacity = (walkable.free_count() as f32 / (side * side)).floor() as usize;
+    if trips.len() > capacity.max(1) {
+        return Err(PlanError::Invalid(format!(
+            "{} people do not fit on {} free cells (at most {capacity} bodies of radius {} cells)",
+            trips.len(),
+            walkable.free_count(),
+            config.body_radius
+        )));
+    }
+    for (i, trip) in trips.iter().enumerate() {
+        for (what, cell) in [("start", trip.start), ("goal", trip.goal)] {
+            if !walkable.contains(cell) {
+                return Err(PlanError::Invalid(format!(
+                    "person {i}'s {what} {cell:?} is outside the {}x{} floor map",
+                    walkable.rows(),
+                    walkable.cols()
+                )));
+            }
+            if walkable.is_obstacle(cell) {
+                return Err(PlanError::Invalid(format!(
+                    "person {i}'s {what} {cell:?} is on furniture, a wall or too close to one \
+                     for a body of radius {} cells",
+                    config.body_radius
+                )));
+            }
+        }
+        for (j, other) in trips.iter().enumerate().take(i) {
+            let d = point(other.start).distance(point(trip.start));
+            if d < 2.0 * config.body_radius {
+                return Err(PlanError::Invalid(format!(
+                    "persons {j} and {i} start {d:.2} cells apart, closer than two body radii \
+                     ({:.2}): their bodies overlap",
+                    2.0 * config.body_radius
+                )));
+            }
+        }
+    }
+    let fields = FastMarching::default()
+        .solve2_batch(&trips.iter().map(|t| (walkable, t.goal)).collect::<Vec<_>>())?;
+    for (i, (trip, field)) in trips.iter().zip(&fields).enumerate() {
+        if !value(field, trip.start).is_finite() {
+            return Err(PlanError::Invalid(format!(
+                "person {i}'s goal {:?} cannot be reached from their start {:?} on the floor map",
+                trip.goal, trip.start
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Each person's shortest path length on the empty `walkable` map, in cells (second-order fast
+/// marching): what path ratios divide by.
+///
+/// # Errors
+/// As [`FastMarching::solve2`].
+pub fn shortest_lengths(walkable: &Grid2, trips: &[Trip]) -> Result<Vec<f32>> {
+    let fields = FastMarching::with_order(Order::Second)
+        .solve2_batch(&trips.iter().map(|t| (walkable, t.goal)).collect::<Vec<_>>())?;
+    Ok(trips
+        .iter()
+        .zip(&fields)
+        .map(|(t, f)| value(f, t.start))
+        .collect())
+}
+
+/// Algorithm 1 with `model`'s fields (module docs): every person's field on the map the
+/// others change, one batched prediction per time step.
+///
+/// # Errors
+/// A bad problem ([`check_trips`]); the model's errors.
+pub fn walk_crowd(
+    walkable: &Grid2,
+    trips: &[Trip],
+    model: &impl FieldModel,
+    config: &CrowdConfig,
+) -> Result<CrowdRun> {
+    check_trips(walkable, trips, config)?;
+    let n = trips.len();
+    let goals: Vec<Point2> = trips.iter().map(|t| point(t.goal)).collect();
+    let mut pos: Vec<Point2> = trips.iter().map(|t| point(t.start)).collect();
+    let mut run = CrowdRun {
+        frames: vec![pos.clone()],
+        arrived_at: vec![None; n],
+        waits: 0,
+        yields: 0,
+    };
+    // The model's last finite remaining distance per person (priority); the straight line
+    // until there is one.
+    let mut remaining: Vec<f32> = (0..n).map(|i| pos[i].distance(goals[i])).collect();
+    let disc = 2.0 * config.body_radius;
+    for t in 0..config.max_steps {
+        let walking: Vec<usize> = (0..n).filter(|&i| run.arrived_at[i].is_none()).collect();
+        if walking.is_empty() {
+            break;
+        }
+        let maps: Vec<Grid2> = walking
+            .iter()
+            .map(|&i| {
+                with_discs(
+                    walkable,
+                    walking.iter().filter(|&&j| j != i).map(|&j| pos[j]),
+                    disc,
+                )
+            })
+            .collect::<Result<_>>()?;
+        let fields = predict_where_free(model, &maps, walking.iter().map(|&i| trips[i].goal))?;
+        let mut field_of: Vec<Option<Field2>> = vec![None; n];
+        let mut blocked = Vec::new();
+        for (k, (&i, field)) in walking.iter().zip(fields).enumerate() {
+            let v = field
+                .as_ref()
+                .map_or(f32::INFINITY, |f| value_at(f, pos[i]));
+            if v.is_finite() {
+                remaining[i] = v;
+                field_of[i] = field;
+            } else {
+                blocked.push(k);
+            }
+        }
+        let mut order = walking.clone();
+        order.sort_by(|&a, &b| remaining[a].total_cmp(&remaining[b]).then(a.cmp(&b)));
+        let rank = |i: usize| order.iter().position(|&j| j == i).unwrap_or(usize::MAX);
+        // The blocked plan again past everyone behind them in priority.
+        if !blocked.is_empty() {
+            let relaxed: Vec<Grid2> = blocked
+                .iter()
+                .map(|&k| {
+                    let i = walking[k];
+                    let ahead = walking.iter().filter(|&&j| j != i && rank(j) < rank(i));
+                    with_discs(walkable, ahead.map(|&j| pos[j]), disc)
+                })
+                .collect::<Result<_>>()?;
+            let goals_blocked = blocked.iter().map(|&k| trips[walking[k]].goal);
+            for (&k, field) in
+                blocked
+                    .iter()
+                    .zip(predict_where_free(model, &relaxed, goals_blocked)?)
+            {
+                let i = walking[k];
+                if field
+                    .as_ref()
+                    .is_some_and(|f| value_at(f, pos[i]).is_finite())
+                {
+                    field_of[i] = field;
+                }
+            }
+        }
+        // Steps in priority order; `next` holds this step's end for those who have moved.
+        let mut next: Vec<Option<Point2>> = vec![None; n];
+        for &i in &order {
+            let others = |p0: Point2, p1: Point2| {
+                walking.iter().all(|&j| {
+                    j == i || {
+                        let (q0, q1) = (pos[j], next[j].unwrap_or(pos[j]));
+                        closest_approach(p0, p1, q0, q1) >= disc
+                    }
+                })
+            };
+            let candidates = candidates(pos[i], goals[i], config.step_length);
+            let chosen = match &field_of[i] {
+                Some(field) => {
+                    let here = value_at(field, pos[i]);
+                    candidates
+                        .iter()
+                        .filter(|&&p| segment_clear(walkable, pos[i], p) && others(pos[i], p))
+                        // The goal itself beats every other end (a step may end on the goal's
+                        // cell short of its centre, where the field is 0 too).
+                        .map(|&p| {
+                            (
+                                p,
+                                if p == goals[i] {
+                                    -1.0
+                                } else {
+                                    value_at(field, p)
+                                },
+                            )
+                        })
+                        .filter(|&(_, v)| v < here - 1e-3)
+                        .min_by(|a, b| a.1.total_cmp(&b.1))
+                        .map(|(p, _)| p)
+                }
+                None => {
+                    // Out of the way of the nearest person ahead in priority.
+                    let ahead: Vec<Point2> = walking
+                        .iter()
+                        .filter(|&&j| rank(j) < rank(i))
+                        .map(|&j| next[j].unwrap_or(pos[j]))
+                        .collect();
+                    let clearance = |p: Point2| {
+                        ahead
+                            .iter()
+                            .map(|&q| q.distance(p))
+                            .fold(f32::INFINITY, f32::min)
+                    };
+                    let here = clearance(pos[i]);
+                    let step = candidates
+                        .iter()
+                        .filter(|&&p| segment_clear(walkable, pos[i], p) && others(pos[i], p))
+                        .map(|&p| (p, clearance(p)))
+                        .filter(|&(_, c)| c > here + 1e-3)
+                        .max_by(|a, b| a.1.total_cmp(&b.1))
+                        .map(|(p, _)| p);
+                    run.yields += step.is_some() as usize;
+                    step
+                }
+            };
+            if chosen.is_none() {
+                run.waits += 1;
+            }
+            next[i] = Some(chosen.unwrap_or(pos[i]));
+        }
+        for &i in &walking {
+            pos[i] = next[i].unwrap_or(pos[i]);
+            if pos[i] == goals[i] {
+                run.arrived_at[i] = Some(t + 1);
+            }
+        }
+        run.frames.push(pos.clone());
+    }
+    Ok(run)
+}
+
+/// How the ORCA loop of [`orca_crowd`] looks ahead, in time steps.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct OrcaConfig {
+    /// How far ahead collisions between people are avoided.
+    pub time_horizon: f32,
+    /// How far ahead collisions with the map are avoided.
+    pub obstacle_time_horizon: f32,
+}
+
+impl Default for OrcaConfig {
+    fn default() -> Self {
+        Self {
+            time_horizon: 3.0,
+            obstacle_time_horizon: 1.0,
+        }
+    }
+}
+
+/// ORCA (optimal reciprocal collision avoidance, `dodgy_2d`'s port of RVO2) on the same
+/// problem: every person's preferred velocity heads for the best point one step away on the
+/// exact field of the empty map (the waypoint a crowd simulation would be given), and ORCA
+/// turns it into a velocity that avoids the others and the map's blocked cells near them (as
+/// closed square obstacles). All people move at once, at most a step per time step; a person
+/// within half a cell of their goal has arrived.
+///
+/// # Errors
+/// A bad problem ([`check_trips`]); solver errors.
+pub fn orca_crowd(
+    walkable: &Grid2,
+    trips: &[Trip],
+    config: &CrowdConfig,
+    orca: &OrcaConfig,
+) -> Result<CrowdRun> {
+    check_trips(walkable, trips, config)?;
+    let n = trips.len();
+    let statics = FastMarching::with_order(Order::Second)
+        .solve2_batch(&trips.iter().map(|t| (walkable, t.goal)).collect::<Vec<_>>())?;
+    let goals: Vec<Point2> = trips.iter().map(|t| point(t.goal)).collect();
+    let mut pos: Vec<Point2> = trips.iter().map(|t| point(t.start)).collect();
+    let mut vel = vec![Vec2::ZERO; n];
+    let mut run = CrowdRun {
+        frames: vec![pos.clone()],
+        arrived_at: vec![None; n],
+        waits: 0,
+        yields: 0,
+    };
+    let options = AvoidanceOptions {
+        obstacle_margin: 0.1,
+        time_horizon: orca.time_horizon,
+        obstacle_time_horizon: orca.obstacle_time_horizon,
+    };
+    let step = config.step_length;
+    let reach = step * (orca.time_horizon + 1.0) + 2.0 * config.body_radius;
+    for t in 0..config.max_steps {
+        let walking: Vec<usize> = (0..n).filter(|&i| run.arrived_at[i].is_none()).collect();
+        if walking.is_empty() {
+            break;
+        }
+        let agent = |i: usize| Agent {
+            position: Vec2::new(pos[i].col, pos[i].row),
+            velocity: vel[i],
+            radius: config.body_radius,
+            avoidance_responsibility: 1.0,
+        };
+        let velocities: Vec<Vec2> = walking
+            .iter()
+            .map(|&i| {
+                let waypoint = candidates(pos[i], goals[i], step)
+                    .into_iter()
+                    .filter(|&p| segment_clear(walkable, pos[i], p))
+                    .min_by(|&a, &b| value_at(&statics[i], a).total_cmp(&value_at(&statics[i], b)))
+                    .unwrap_or(pos[i]);
+                let preferred = Vec2::new(waypoint.col - pos[i].col, waypoint.row - pos[i].row);
+                let neighbours: Vec<Cow<Agent>> = walking
+                    .iter()
+                    .filter(|&&j| j != i && pos[j].distance(pos[i]) < reach)
+                    .map(|&j| Cow::Owned(agent(j)))
+                    .collect();
+                let obstacles =
+                    square_obstacles(walkable, pos[i], step * orca.obstacle_time_horizon + 2.0);
+                let obstacles: Vec<Cow<Obstacle>> = obstacles.into_iter().map(Cow::Owned).collect();
+                agent(i).compute_avoiding_velocity(
+                    &neighbours,
+                    &obstacles,
+                    preferred,
+                    step,
+                    1.0,
+                    &options,
+                )
+            })
+            .collect();
+        for (&i, v) in walking.iter().zip(velocities) {
+            vel[i] = v;
+            if v.length() < 1e-3 {
+                run.waits += 1;
+            }
+            pos[i] = Point2::new(pos[i].row + v.y, pos[i].col + v.x);
+            if pos[i].distance(goals[i]) < 0.5 {
+                pos[i] = goals[i];
+                run.arrived_at[i] = Some(t + 1);
+            }
+        }
+        run.frames.push(pos.clone());
+    }
+    Ok(run)
+}
+
+/// The blocked cells of `grid` with a free 8-neighbour within `range` cells of `at`, as
+/// counter-clockwise unit squares in ORCA's `(x, y) = (col, row)` frame.
+fn square_obstacles(grid: &Grid2, at: Point2, range: f32) -> Vec<Obstacle> {
+    let (rows, cols) = (grid.rows() as isize, grid.cols() as isize);
+    let lo = |v: f32| (v - range).floor().max(0.0) as isize;
+    let hi = |v: f32, n: isize| ((v + range).ceil() as isize).min(n - 1);
+    let mut out = Vec::new();
+    for r in lo(at.row)..=hi(at.row, rows) {
+        for c in lo(at.col)..=hi(at.col, cols) {
+            let cell = Cell2::new(r as usize, c as usize);
+            let border = grid.is_obstacle(cell)
+                && (-1..=1).any(|dr| {
+                    (-1..=1).any(|dc| {
+                        let (nr, nc) = (r + dr, c + dc);
+                        nr >= 0
+                            && nc >= 0
+                            && nr < rows
+                            && nc < cols
+                            && grid.is_free(Cell2::new(nr as usize, nc as usize))
+                    })
+                });
+            if border {
+                let (x, y) = (c as f32, r as f32);
+                out.push(Obstacle::Closed {
+                    vertices: vec![
+                        Vec2::new(x - 0.5, y - 0.5),
+                        Vec2::new(x + 0.5, y - 0.5),
+                        Vec2::new(x + 0.5, y + 0.5),
+                        Vec2::new(x - 0.5, y + 0.5),
+                    ],
+                });
+            }
+        }
+    }
+    out
+}
+
+/// The fields of `goals` on `maps`, `None` where the goal is covered on its map (someone
+/// stands on it): one [`FieldModel::predict_many`] call for the rest.
+fn predict_where_free(
+    model: &impl FieldModel,
+    maps: &[Grid2],
+    goals: impl Iterator<Item = Cell2>,
+) -> Result<Vec<Option<Field2>>> {
+    let goals: Vec<Cell2> = goals.collect();
+    let asked: Vec<(&Grid2, Cell2)> = maps
+        .iter()
+        .zip(&goals)
+        .filter(|(m, &g)| m.is_free(g))
+        .map(|(m, &g)| (m, g))
+        .collect();
+    let mut fields = model.predict_many(&asked)?.into_iter();
+    Ok(maps
+        .iter()
+        .zip(&goals)
+        .map(|(m, &g)| m.is_free(g).then(|| fields.next()).flatten())
+        .collect())
+}
+
+/// `grid` with every cell closer than `radius` to one of `centres` blocked.
+fn with_discs(grid: &Grid2, centres: impl Iterator<Item = Point2>, radius: f32) -> Result<Grid2> {
+    let (rows, cols) = (grid.rows(), grid.cols());
+    let mut obstacles = grid.obstacles().to_vec();
+    for p in centres {
+        let r0 = (p.row - radius).floor().max(0.0) as usize;
+        let c0 = (p.col - radius).floor().max(0.0) as usize;
+        let r1 = ((p.row + radius).ceil().max(0.0) as usize).min(rows.saturating_sub(1));
+        let c1 = ((p.col + radius).ceil().max(0.0) as usize).min(cols.saturating_sub(1));
+        for r in r0..=r1 {
+            for c in c0..=c1 {
+                if Point2::new(r as f32, c as f32).distance(p) < radius {
+                    obstacles[r * cols + c] = true;
+                }
+            }
+        }
+    }
+    Ok(Grid2::from_obstacles(rows, cols, obstacles)?)
+}
+
+/// The points a step from `at` may end at: 8 directions at the step length, half of it and
+/// one cell, and the goal itself when it is within a step.
+fn candidates(at: Point2, goal: Point2, step: f32) -> Vec<Point2> {
+    const S: f32 = std::f32::consts::FRAC_1_SQRT_2;
+    const DIRS: [(f32, f32); 8] = [
+        (-1.0, 0.0),
+        (1.0, 0.0),
+        (0.0, -1.0),
+        (0.0, 1.0),
+        (-S, -S),
+        (-S, S),
+        (S, -S),
+        (S, S),
+    ];
+    let mut out: Vec<Point2> = [step, 0.5 * step, 1.0]
+        .iter()
+        .flat_map(|&len| {
+            DIRS.iter()
+                .map(move |&(dr, dc)| Point2::new(at.row + len * dr, at.col + len * dc))
+        })
+        .collect();
+    if at.distance(goal) <= step {
+        out.push(goal);
+    }
+    out
+}
+
+/// Whether the straight step from `a` to `b`, sampled every quarter cell, stays on free cells.
+fn segment_clear(grid: &Grid2, a: Point2, b: Point2) -> bool {
+    let n = (a.distance(b) / 0.25).ceil().max(1.0) as usize;
+    (0..=n).all(|k| {
+        let s = k as f32 / n as f32;
+        Point2::new(a.row + s * (b.row - a.row), a.col + s * (b.col - a.col))
+            .round()
+            .is_some_and(|c| grid.contains(c) && grid.is_free(c))
+    })
+}
+
+/// The smallest distance between two points moving in straight lines at constant speed over
+/// the same time step, `a0 -> a1` and `b0 -> b1`.
+pub fn closest_approach(a0: Point2, a1: Point2, b0: Point2, b1: Point2) -> f32 {
+    let (dr, dc) = (a0.row - b0.row, a0.col - b0.col);
+    let (vr, vc) = (
+        (a1.row - a0.row) - (b1.row - b0.row),
+        (a1.col - a0.col) - (b1.col - b0.col),
+    );
+    let vv = vr * vr + vc * vc;
+    let s = match vv > 0.0 {
+        true => (-(dr * vr + dc * vc) / vv).clamp(0.0, 1.0),
+        false => 0.0,
+    };
+    (dr + s * vr).hypot(dc + s * vc)
+}
+
+/// The field's value at the cell under `p`, infinite off the grid.
+fn value_at(field: &Field2, p: Point2) -> f32 {
+    p.round().map_or(f32::INFINITY, |c| value(field, c))
+}
+
+fn value(field: &Field2, c: Cell2) -> f32 {
+    field.get(c).unwrap_or(f32::INFINITY)
+}
+
+fn point(c: Cell2) -> Point2 {
+    Point2::new(c.row as f32, c.col as f32)
+}

@@ -1,0 +1,211 @@
+//! The crowd loops: a doorway crossed in both directions, bad problems refused, and the
+//! collision counts checked against hand-made motions.
+
+use envfield_eikonal::FastMarching;
+use envfield_grid::{Cell2, Grid2, Point2};
+use envfield_plan::{
+    check_trips, closest_approach, orca_crowd, shortest_lengths, walk_crowd, CrowdConfig, CrowdRun,
+    OrcaConfig, Trip,
+};
+
+/// Two 17x17 rooms side by side (in centre space: where a body's centre may stand), joined
+/// by a doorway three cells wide and five long: one person at a time fits through it.
+fn two_rooms() -> Grid2 {
+    let (rows, cols) = (21, 41);
+    let mut obstacles = vec![false; rows * cols];
+    for r in 0..rows {
+        for c in 0..cols {
+            let border = r < 2 || r >= rows - 2 || c < 2 || c >= cols - 2;
+            let wall = (18..=22).contains(&c) && !(9..=11).contains(&r);
+            obstacles[r * cols + c] = border || wall;
+        }
+    }
+    Grid2::from_obstacles(rows, cols, obstacles).unwrap()
+}
+
+fn opposite_trips() -> Vec<Trip> {
+    vec![
+        Trip {
+            start: Cell2::new(10, 5),
+            goal: Cell2::new(12, 36),
+        },
+        Trip {
+            start: Cell2::new(8, 35),
+            goal: Cell2::new(10, 4),
+        },
+    ]
+}
+
+fn check_doorway(run: &CrowdRun, grid: &Grid2, config: &CrowdConfig, what: &str) {
+    assert!(
+        run.arrived_at.iter().all(Option::is_some),
+        "{what}: not everyone arrived: {:?}",
+        run.arrived_at
+    );
+    assert_eq!(
+        run.person_collisions(config.body_radius),
+        0,
+        "{what}: people collided"
+    );
+    assert_eq!(
+        run.obstacle_collisions(grid),
+        0,
+        "{what}: someone walked into a wall"
+    );
+}
+
+#[test]
+fn two_people_cross_a_doorway_in_opposite_directions() {
+    let grid = two_rooms();
+    let config = CrowdConfig::default();
+    let run = walk_crowd(&grid, &opposite_trips(), &FastMarching::default(), &config).unwrap();
+    check_doorway(&run, &grid, &config, "exact loop");
+    // Someone had to give way: the doorway holds one body at a time.
+    assert!(run.waits + run.yields > 0, "nobody waited or yielded");
+    let shortest = shortest_lengths(&grid, &opposite_trips()).unwrap();
+    for (i, s) in shortest.iter().enumerate() {
+        let ratio = run.path_length(i) / s;
+        assert!(
+            (0.99..2.0).contains(&ratio),
+            "person {i}: path ratio {ratio}"
+        );
+    }
+}
+
+#[test]
+fn the_doorway_standoff_is_broken_whoever_is_nearer() {
+    // Symmetric starts: equal remaining distances, the tie goes to the lower index.
+    let grid = two_rooms();
+    let config = CrowdConfig::default();
+    let trips = vec![
+        Trip {
+            start: Cell2::new(10, 14),
+            goal: Cell2::new(10, 36),
+        },
+        Trip {
+            start: Cell2::new(10, 26),
+            goal: Cell2::new(10, 4),
+        },
+    ];
+    let run = walk_crowd(&grid, &trips, &FastMarching::default(), &config).unwrap();
+    check_doorway(&run, &grid, &config, "face to face at the doorway");
+}
+
+#[test]
+fn a_lone_walker_follows_the_shortest_path() {
+    let grid = two_rooms();
+    let config = CrowdConfig::default();
+    let trips = [Trip {
+        start: Cell2::new(3, 3),
+        goal: Cell2::new(17, 37),
+    }];
+    let run = walk_crowd(&grid, &trips, &FastMarching::default(), &config).unwrap();
+    assert!(run.arrived_at[0].is_some());
+    let ratio = run.path_length(0) / shortest_lengths(&grid, &trips).unwrap()[0];
+    assert!((0.98..1.12).contains(&ratio), "path ratio {ratio}");
+    assert_eq!(run.waits + run.yields, 0);
+}
+
+#[test]
+fn orca_runs_the_same_problem_and_its_collisions_are_counted() {
+    let grid = two_rooms();
+    let config = CrowdConfig::default();
+    let trips = [Trip {
+        start: Cell2::new(3, 3),
+        goal: Cell2::new(17, 37),
+    }];
+    let run = orca_crowd(&grid, &trips, &config, &OrcaConfig::default()).unwrap();
+    assert!(
+        run.arrived_at[0].is_some(),
+        "a lone ORCA agent did not arrive"
+    );
+    assert_eq!(run.person_collisions(config.body_radius), 0);
+}
+
+#[test]
+fn closest_approach_sees_a_crossing_between_frames() {
+    // Both end farther apart than they start, but pass through the same point midway.
+    let (a0, a1) = (Point2::new(0.0, 0.0), Point2::new(4.0, 4.0));
+    let (b0, b1) = (Point2::new(4.0, 0.0), Point2::new(0.0, 4.0));
+    assert!(closest_approach(a0, a1, b0, b1) < 1e-5);
+    // Parallel motion keeps the distance.
+    let d = closest_approach(a0, a1, Point2::new(0.0, 3.0), Point2::new(4.0, 7.0));
+    assert!((d - 3.0).abs() < 1e-5);
+    let run = CrowdRun {
+        frames: vec![vec![a0, b0], vec![a1, b1]],
+        arrived_at: vec![None, None],
+        waits: 0,
+        yields: 0,
+    };
+    assert_eq!(run.person_collisions(1.0), 1);
+}
+
+#[test]
+fn bad_problems_get_clear_errors() {
+    let grid = two_rooms();
+    let config = CrowdConfig::default();
+    let err = |trips: &[Trip]| check_trips(&grid, trips, &config).unwrap_err().to_string();
+    let ok = Trip {
+        start: Cell2::new(5, 5),
+        goal: Cell2::new(15, 35),
+    };
+    let e = err(&[Trip {
+        goal: Cell2::new(0, 0),
+        ..ok
+    }]);
+    assert!(
+        e.contains("person 0's goal") && e.contains("furniture"),
+        "{e}"
+    );
+    let e = err(&[
+        ok,
+        Trip {
+            start: Cell2::new(99, 5),
+            ..ok
+        },
+    ]);
+    assert!(
+        e.contains("person 1's start") && e.contains("outside"),
+        "{e}"
+    );
+    let e = err(&[
+        ok,
+        Trip {
+            start: Cell2::new(6, 6),
+            ..ok
+        },
+    ]);
+    assert!(
+        e.contains("persons 0 and 1") && e.contains("overlap"),
+        "{e}"
+    );
+    let crowd: Vec<Trip> = (0..200)
+        .map(|k| Trip {
+            start: Cell2::new(3 + k % 14, 3),
+            ..ok
+        })
+        .collect();
+    let e = err(&crowd);
+    assert!(e.contains("do not fit"), "{e}");
+    assert!(err(&[]).contains("at least one person"));
+    let e = check_trips(
+        &grid,
+        &[ok],
+        &CrowdConfig {
+            step_length: 0.0,
+            ..config
+        },
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("step length"), "{e}");
+    // A goal in a closed-off part of the map.
+    let mut walled = grid.clone();
+    for r in 0..21 {
+        walled.set_obstacle(Cell2::new(r, 30), true).unwrap();
+    }
+    let e = check_trips(&walled, &[ok], &config)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("cannot be reached"), "{e}");
+}
