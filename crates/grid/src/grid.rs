@@ -164,6 +164,30 @@ impl Grid2 {
             .filter(|(_, &o)| !o)
             .map(|(i, _)| self.cell(i))
     }
+
+    /// This grid in the top-left corner of a `rows x cols` grid whose other cells are
+    /// obstacles: maps of different sizes brought to one size for a batch, cells keeping
+    /// their coordinates.
+    ///
+    /// # Errors
+    /// [`GridError::Shape`] when `rows x cols` is smaller than this grid along either axis.
+    pub fn padded(&self, rows: usize, cols: usize) -> Result<Self> {
+        if rows < self.rows || cols < self.cols {
+            return Err(GridError::InvalidShape {
+                shape: vec![rows, cols],
+                reason: format!(
+                    "cannot pad a {}x{} grid to a smaller {rows}x{cols}",
+                    self.rows, self.cols
+                ),
+            });
+        }
+        let mut obstacles = vec![true; rows * cols];
+        for r in 0..self.rows {
+            obstacles[r * cols..r * cols + self.cols]
+                .copy_from_slice(&self.obstacles[r * self.cols..(r + 1) * self.cols]);
+        }
+        Self::from_obstacles(rows, cols, obstacles)
+    }
 }
 
 /// A 3D occupancy grid indexed `(x, y, z)`, stored in C order (z fastest), as `numpy` stores

@@ -41,16 +41,29 @@ pub struct CrowdConfig {
     pub step_length: f32,
     /// Time steps before the loop gives up on the people still walking.
     pub max_steps: usize,
+    /// Others are marked on a person's map only within this distance of them:
+    /// `f32::INFINITY` marks everyone, as the paper's Algorithm 1 does; a few steps keeps
+    /// people from detouring around someone far away who will have moved on by the time they
+    /// get there. Nearer people are always avoided by the step check, whatever this is.
+    pub horizon: f32,
+    /// Time steps a person held up by others (their way around them more than a step longer
+    /// than the way through) waits for the way through to clear before going round.
+    pub patience: usize,
+    /// Headings a step may take, evenly spaced (8 in the paper: the grid's moves).
+    pub directions: usize,
 }
 
 impl Default for CrowdConfig {
     /// A 0.25 m body and a 0.5 m step on a 0.1 m map, 400 steps (200 s at a step a half
-    /// second).
+    /// second), others marked within 1.5 m.
     fn default() -> Self {
         Self {
             body_radius: 2.5,
             step_length: 5.0,
             max_steps: 400,
+            horizon: 15.0,
+            patience: 3,
+            directions: 8,
         }
     }
 }
@@ -60,11 +73,13 @@ impl CrowdConfig {
         let positive = |v: f32| v.is_finite() && v > 0.0;
         if !(positive(self.body_radius) && self.step_length.is_finite() && self.step_length >= 1.0)
             || self.max_steps == 0
+            || !(self.horizon >= 0.0)
+            || self.directions < 4
         {
             return Err(PlanError::Invalid(format!(
-                "crowd config: body radius > 0, step length >= 1 cell and max_steps >= 1 \
-                 (got {}, {}, {})",
-                self.body_radius, self.step_length, self.max_steps
+                "crowd config: body radius > 0, step length >= 1 cell, max_steps >= 1, \
+                 horizon >= 0 and at least 4 directions (got {}, {}, {}, {}, {})",
+                self.body_radius, self.step_length, self.max_steps, self.horizon, self.directions
             )));
         }
         Ok(())
@@ -264,6 +279,9 @@ pub fn walk_crowd(
     // until there is one.
     let mut remaining: Vec<f32> = (0..n).map(|i| pos[i].distance(goals[i])).collect();
     let disc = 2.0 * config.body_radius;
+    // Each person's field on the map without people, and the steps they have waited held up.
+    let statics = model.predict_many(&trips.iter().map(|t| (walkable, t.goal)).collect::<Vec<_>>())?;
+    let mut held = vec![0usize; n];
     for t in 0..config.max_steps {
         let walking: Vec<usize> = (0..n).filter(|&i| run.arrived_at[i].is_none()).collect();
         if walking.is_empty() {
@@ -272,7 +290,7 @@ pub fn walk_crowd(
         let maps: Vec<Grid2> = walking
             .iter()
             .map(|&i| {
-                with_discs(
+                mark_discs(
                     walkable,
                     walking.iter().filter(|&&j| j != i).map(|&j| pos[j]),
                     disc,
@@ -302,8 +320,10 @@ pub fn walk_crowd(
                 .iter()
                 .map(|&k| {
                     let i = walking[k];
-                    let ahead = walking.iter().filter(|&&j| j != i && rank(j) < rank(i));
-                    with_discs(walkable, ahead.map(|&j| pos[j]), disc)
+                    let ahead = walking.iter().filter(|&&j| {
+                        j != i && rank(j) < rank(i) && pos[j].distance(pos[i]) <= config.horizon
+                    });
+                    mark_discs(walkable, ahead.map(|&j| pos[j]), disc)
                 })
                 .collect::<Result<_>>()?;
             let goals_blocked = blocked.iter().map(|&k| trips[walking[k]].goal);
@@ -332,35 +352,51 @@ pub fn walk_crowd(
                     }
                 })
             };
-            let candidates = candidates(pos[i], goals[i], config.step_length);
+            let candidates = candidates(pos[i], goals[i], config.step_length, config.directions);
+            // The best step down `field`, pairwise safe; the goal itself beats every other
+            // end (a step may end on the goal's cell short of its centre, where the field is
+            // 0 too).
+            let descend = |field: &Field2| {
+                let here = value_at(field, pos[i]);
+                candidates
+                    .iter()
+                    .filter(|&&p| segment_clear(walkable, pos[i], p) && others(pos[i], p))
+                    .map(|&p| (p, if p == goals[i] { -1.0 } else { value_at(field, p) }))
+                    .filter(|&(_, v)| v < here - 1e-3)
+                    .min_by(|a, b| a.1.total_cmp(&b.1))
+                    .map(|(p, _)| p)
+            };
+            // Held up: the way around the others is more than a step longer than the way
+            // through them. Someone near moves on soon, so keep to the way through them (the
+            // pairwise check keeps the distance) for `patience` steps before going round.
+            let held_up = field_of[i].as_ref().is_some_and(|f| {
+                value_at(f, pos[i]) > value_at(&statics[i], pos[i]) + config.step_length
+            });
+            if !held_up {
+                held[i] = 0;
+            }
             let chosen = match &field_of[i] {
-                Some(field) => {
-                    let here = value_at(field, pos[i]);
-                    candidates
-                        .iter()
-                        .filter(|&&p| segment_clear(walkable, pos[i], p) && others(pos[i], p))
-                        // The goal itself beats every other end (a step may end on the goal's
-                        // cell short of its centre, where the field is 0 too).
-                        .map(|&p| {
-                            (
-                                p,
-                                if p == goals[i] {
-                                    -1.0
-                                } else {
-                                    value_at(field, p)
-                                },
-                            )
-                        })
-                        .filter(|&(_, v)| v < here - 1e-3)
-                        .min_by(|a, b| a.1.total_cmp(&b.1))
-                        .map(|(p, _)| p)
+                Some(_) if held_up && held[i] < config.patience => {
+                    let step = descend(&statics[i]);
+                    if step.is_none() {
+                        held[i] += 1;
+                    }
+                    step
                 }
+                Some(field) => descend(field),
                 None => {
-                    // Out of the way of the nearest person ahead in priority.
+                    // Out of the way of the people ahead in priority who could not move
+                    // this step and are close enough to be held up by this one (within two
+                    // steps of touching); with none, wait.
+                    let close = disc + 2.0 * config.step_length;
                     let ahead: Vec<Point2> = walking
                         .iter()
-                        .filter(|&&j| rank(j) < rank(i))
-                        .map(|&j| next[j].unwrap_or(pos[j]))
+                        .filter(|&&j| {
+                            rank(j) < rank(i)
+                                && next[j] == Some(pos[j])
+                                && pos[j].distance(pos[i]) <= close
+                        })
+                        .map(|&j| pos[j])
                         .collect();
                     let clearance = |p: Point2| {
                         ahead
@@ -463,7 +499,7 @@ pub fn orca_crowd(
         let velocities: Vec<Vec2> = walking
             .iter()
             .map(|&i| {
-                let waypoint = candidates(pos[i], goals[i], step)
+                let waypoint = candidates(pos[i], goals[i], step, config.directions)
                     .into_iter()
                     .filter(|&p| segment_clear(walkable, pos[i], p))
                     .min_by(|&a, &b| value_at(&statics[i], a).total_cmp(&value_at(&statics[i], b)))
@@ -562,8 +598,12 @@ fn predict_where_free(
         .collect())
 }
 
-/// `grid` with every cell closer than `radius` to one of `centres` blocked.
-fn with_discs(grid: &Grid2, centres: impl Iterator<Item = Point2>, radius: f32) -> Result<Grid2> {
+/// `grid` with every cell whose centre is closer than `radius` cells to one of `centres`
+/// blocked: other people on a person's map (at twice the body radius, in centre space).
+///
+/// # Errors
+/// None in practice (the grid keeps its valid shape).
+pub fn mark_discs(grid: &Grid2, centres: impl Iterator<Item = Point2>, radius: f32) -> Result<Grid2> {
     let (rows, cols) = (grid.rows(), grid.cols());
     let mut obstacles = grid.obstacles().to_vec();
     for p in centres {
@@ -582,25 +622,17 @@ fn with_discs(grid: &Grid2, centres: impl Iterator<Item = Point2>, radius: f32) 
     Ok(Grid2::from_obstacles(rows, cols, obstacles)?)
 }
 
-/// The points a step from `at` may end at: 8 directions at the step length, half of it and
-/// one cell, and the goal itself when it is within a step.
-fn candidates(at: Point2, goal: Point2, step: f32) -> Vec<Point2> {
-    const S: f32 = std::f32::consts::FRAC_1_SQRT_2;
-    const DIRS: [(f32, f32); 8] = [
-        (-1.0, 0.0),
-        (1.0, 0.0),
-        (0.0, -1.0),
-        (0.0, 1.0),
-        (-S, -S),
-        (-S, S),
-        (S, -S),
-        (S, S),
-    ];
+/// The points a step from `at` may end at: `directions` evenly spaced headings (the first
+/// along -row) at the step length, half of it and one cell, and the goal itself when it is
+/// within a step.
+fn candidates(at: Point2, goal: Point2, step: f32, directions: usize) -> Vec<Point2> {
     let mut out: Vec<Point2> = [step, 0.5 * step, 1.0]
         .iter()
         .flat_map(|&len| {
-            DIRS.iter()
-                .map(move |&(dr, dc)| Point2::new(at.row + len * dr, at.col + len * dc))
+            (0..directions).map(move |k| {
+                let a = std::f32::consts::TAU * k as f32 / directions as f32;
+                Point2::new(at.row - len * a.cos(), at.col + len * a.sin())
+            })
         })
         .collect();
     if at.distance(goal) <= step {

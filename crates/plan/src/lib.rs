@@ -55,7 +55,7 @@ mod search3;
 
 pub use astar::{AStar, Octile};
 pub use crowd::{
-    check_trips, closest_approach, orca_crowd, shortest_lengths, walk_crowd, CrowdConfig, CrowdRun,
+    check_trips, closest_approach, mark_discs, orca_crowd, shortest_lengths, walk_crowd, CrowdConfig, CrowdRun,
     OrcaConfig, Trip,
 };
 pub use descent::{descend, FieldDescent};

@@ -209,3 +209,4 @@ fn bad_problems_get_clear_errors() {
         .to_string();
     assert!(e.contains("cannot be reached"), "{e}");
 }
+

@@ -97,6 +97,31 @@ impl FloorMap {
     }
 }
 
+impl FloorMap {
+    /// Where a body of `radius` metres may stand ([`FloorMap::inflated`]), padded with
+    /// obstacles at the far rows and columns to `extent` cells when one is given: the
+    /// walkable map people navigate, at one size for every room of a batch.
+    ///
+    /// # Errors
+    /// As [`FloorMap::inflated`]; [`SceneError::InvalidInput`] when the map is larger than
+    /// `extent`.
+    pub fn walkable(&self, radius: f32, extent: Option<[usize; 2]>) -> Result<Grid2> {
+        let grid = self.inflated(radius)?;
+        match extent {
+            None => Ok(grid),
+            Some([rows, cols]) if rows >= grid.rows() && cols >= grid.cols() => {
+                Ok(grid.padded(rows, cols)?)
+            }
+            Some([rows, cols]) => Err(SceneError::InvalidInput(format!(
+                "a {}x{} floor map does not fit in {rows}x{cols} cells; use a coarser resolution \
+                 or a larger extent",
+                grid.rows(),
+                grid.cols()
+            ))),
+        }
+    }
+}
+
 /// The squared Euclidean distance, in cells, from every cell of a `rows x cols` map to the
 /// nearest obstacle cell (0 on obstacles, infinite without any): a column pass, then the lower
 /// envelope of parabolas along each row. Every value is an exact integer.

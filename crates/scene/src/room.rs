@@ -48,6 +48,16 @@ impl Default for RoomConfig {
 }
 
 impl RoomConfig {
+    /// Rooms whose floor map fits 64x64 cells at 0.1 m, walls included (interiors 4-6 m by
+    /// 3.5-6 m): the bird's-eye rooms of several people walking at once.
+    pub fn birdseye() -> Self {
+        Self {
+            width: [4.0, 6.0],
+            depth: [3.5, 6.0],
+            ..Self::default()
+        }
+    }
+
     fn validate(&self) -> Result<()> {
         let ok = |r: [f32; 2], min: f32| {
             r[0].is_finite() && r[1].is_finite() && r[0] >= min && r[0] <= r[1]
