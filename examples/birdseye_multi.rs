@@ -21,16 +21,15 @@ use anyhow::{bail, Context, Result};
 use clap::Parser;
 use envfield::affordance::{align_in_scene, resample_path, walk, AlignConfig, WalkConfig};
 use envfield::eikonal::FastMarching;
-use envfield::grid::{Cell2, Field2, FieldModel, Grid2, Point2, SplitMix64};
+use envfield::grid::{Cell2, Field2, FieldModel, Grid2, Point2};
 use envfield::nets::FieldNet;
 use envfield::plan::{
-    mark_discs, orca_crowd, shortest_lengths, walk_crowd, CrowdConfig, CrowdRun, OrcaConfig,
-    Trip,
+    mark_discs, orca_crowd, random_trips, shortest_lengths, walk_crowd, CrowdConfig, CrowdRun,
+    OrcaConfig, Trip,
 };
 use envfield::scene::nalgebra::Point3;
 use envfield::scene::{
-    floor_map, free_components, generate_room, FloorMap, FloorMapConfig, RoomConfig, Scene,
-    TriangleMesh,
+    floor_map, generate_room, FloorMap, FloorMapConfig, RoomConfig, Scene, TriangleMesh,
 };
 use image::{Rgba, RgbaImage};
 
@@ -71,10 +70,6 @@ struct Args {
     /// Step length, metres (one step per time step).
     #[arg(long, default_value_t = 0.5)]
     step_length: f32,
-    /// Others are marked on a person's map only within this distance, metres (`inf`: all of
-    /// them, as the paper's Algorithm 1 does).
-    #[arg(long, default_value_t = 1.5)]
-    horizon: f32,
     /// Time steps a person held up by others waits for the way through them to clear.
     #[arg(long, default_value_t = 3)]
     patience: usize,
@@ -113,43 +108,6 @@ fn floor(scene: Scene, body_radius: f32) -> Result<Floor> {
         map,
         walkable,
     })
-}
-
-/// `people` random trips on `walkable`: starts and goals in its largest region, starts (and
-/// goals) at least two body radii and a cell apart, each goal at least a metre from its start.
-fn random_trips(walkable: &Grid2, people: usize, radius: f32, seed: u64) -> Result<Vec<Trip>> {
-    let (labels, sizes) = free_components(walkable);
-    let largest = (0..sizes.len())
-        .max_by_key(|&k| sizes[k])
-        .context("the floor map has no free cell for a body of this radius")?;
-    let cells: Vec<Cell2> = (0..labels.len())
-        .filter(|&i| labels[i] == largest)
-        .map(|i| walkable.cell(i))
-        .collect();
-    let far = |a: Cell2, b: Cell2, d: f32| point(a).distance(point(b)) >= d;
-    let mut rng = SplitMix64::new(seed ^ 0xC0_FFEE);
-    let mut trips: Vec<Trip> = Vec::new();
-    for _ in 0..people * 2000 {
-        if trips.len() == people {
-            break;
-        }
-        let (start, goal) = (cells[rng.below(cells.len())], cells[rng.below(cells.len())]);
-        let apart = trips.iter().all(|t| {
-            far(t.start, start, 2.0 * radius + 1.0) && far(t.goal, goal, 2.0 * radius + 1.0)
-        });
-        if apart && far(start, goal, 1.0 / RESOLUTION) {
-            trips.push(Trip { start, goal });
-        }
-    }
-    if trips.len() < people {
-        bail!(
-            "could not place {people} people with separate starts and goals on {} free cells \
-             (placed {})",
-            cells.len(),
-            trips.len()
-        );
-    }
-    Ok(trips)
 }
 
 /// One loop's figures on one room.
@@ -214,7 +172,6 @@ fn main() -> Result<()> {
         body_radius: cells(args.body_radius),
         step_length: cells(args.step_length),
         max_steps: args.max_steps,
-        horizon: cells(args.horizon),
         patience: args.patience,
         directions: args.directions,
     };
@@ -230,18 +187,36 @@ fn batch(args: &Args, rooms: usize, model: &FieldNet, config: &CrowdConfig) -> R
     for room in args.seed..args.seed + rooms as u64 {
         let scene = generate_room(&RoomConfig::birdseye(), room)?.scene;
         let floor = floor(scene, args.body_radius)?;
-        let trips = random_trips(&floor.walkable, args.people, config.body_radius, room)?;
+        let trips = random_trips(&floor.walkable, args.people, config, 1.0 / RESOLUTION, room)?;
         let shortest = shortest_lengths(&floor.walkable, &trips)?;
         let w = &floor.walkable;
         let t = Instant::now();
         let run = walk_crowd(w, &trips, model, config)?;
-        learned.add(&run, &shortest, w, config.body_radius, t.elapsed().as_secs_f64());
+        learned.add(
+            &run,
+            &shortest,
+            w,
+            config.body_radius,
+            t.elapsed().as_secs_f64(),
+        );
         let t = Instant::now();
         let run = walk_crowd(w, &trips, &exact, config)?;
-        fmm.add(&run, &shortest, w, config.body_radius, t.elapsed().as_secs_f64());
+        fmm.add(
+            &run,
+            &shortest,
+            w,
+            config.body_radius,
+            t.elapsed().as_secs_f64(),
+        );
         let t = Instant::now();
         let run = orca_crowd(w, &trips, config, &OrcaConfig::default())?;
-        orca.add(&run, &shortest, w, config.body_radius, t.elapsed().as_secs_f64());
+        orca.add(
+            &run,
+            &shortest,
+            w,
+            config.body_radius,
+            t.elapsed().as_secs_f64(),
+        );
         if !args.json {
             eprintln!(
                 "room {room}: learned {}/{} exact {}/{} orca {}/{} reached",
@@ -270,7 +245,13 @@ fn one_room(args: &Args, model: &FieldNet, config: &CrowdConfig) -> Result<()> {
         None => generate_room(&RoomConfig::birdseye(), args.seed)?.scene,
     };
     let floor = floor(scene, args.body_radius)?;
-    let trips = random_trips(&floor.walkable, args.people, config.body_radius, args.seed)?;
+    let trips = random_trips(
+        &floor.walkable,
+        args.people,
+        config,
+        1.0 / RESOLUTION,
+        args.seed,
+    )?;
     let shortest = shortest_lengths(&floor.walkable, &trips)?;
     let t = Instant::now();
     let run = walk_crowd(&floor.walkable, &trips, model, config)?;
@@ -393,11 +374,21 @@ fn render(
             .map(|(&i, m)| (m, trips[i].goal))
             .collect();
         let fields: Vec<Field2> = model.predict_many(&asked)?;
-        let mut img = RgbaImage::from_pixel(cols as u32 * SCALE, rows as u32 * SCALE, Rgba([250, 250, 250, 255]));
+        let mut img = RgbaImage::from_pixel(
+            cols as u32 * SCALE,
+            rows as u32 * SCALE,
+            Rgba([250, 250, 250, 255]),
+        );
         for r in 0..rows {
             for c in 0..cols {
                 if walkable.is_obstacle(Cell2::new(r, c)) {
-                    fill(&mut img, c as u32 * SCALE, r as u32 * SCALE, SCALE, [70, 70, 80]);
+                    fill(
+                        &mut img,
+                        c as u32 * SCALE,
+                        r as u32 * SCALE,
+                        SCALE,
+                        [70, 70, 80],
+                    );
                 }
             }
         }
@@ -409,14 +400,24 @@ fn render(
             }
             let f = &fields[k];
             k += 1;
-            let band = |cell: Cell2| f.get(cell).filter(|v| v.is_finite()).map(|v| (v / 5.0) as i32);
+            let band = |cell: Cell2| {
+                f.get(cell)
+                    .filter(|v| v.is_finite())
+                    .map(|v| (v / 5.0) as i32)
+            };
             let colour = tint(COLOURS[i % 8], 0.55);
             for r in 0..rows {
                 for c in 0..cols.saturating_sub(1) {
                     let (a, b) = (band(Cell2::new(r, c)), band(Cell2::new(r, c + 1)));
                     let down = (r + 1 < rows).then(|| band(Cell2::new(r + 1, c))).flatten();
                     if a.is_some() && ((b.is_some() && a != b) || (down.is_some() && a != down)) {
-                        fill(&mut img, c as u32 * SCALE + 2, r as u32 * SCALE + 2, 2, colour);
+                        fill(
+                            &mut img,
+                            c as u32 * SCALE + 2,
+                            r as u32 * SCALE + 2,
+                            2,
+                            colour,
+                        );
                     }
                 }
             }
@@ -471,7 +472,12 @@ fn disc(img: &mut RgbaImage, p: Point2, radius: f32, scale: u32, c: [u8; 3]) {
             let d = ((dx * dx + dy * dy) as f32).sqrt();
             if d <= r {
                 let edge = d > r - 1.5;
-                put(img, x as i64 + dx, y as i64 + dy, if edge { [20, 20, 20] } else { c });
+                put(
+                    img,
+                    x as i64 + dx,
+                    y as i64 + dy,
+                    if edge { [20, 20, 20] } else { c },
+                );
             }
         }
     }
@@ -502,7 +508,10 @@ fn cross(img: &mut RgbaImage, col: f32, row: f32, scale: u32, c: [u8; 3]) {
 
 fn write_png(img: &RgbaImage, path: &Path) -> Result<()> {
     let mut bytes = Vec::new();
-    img.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png)?;
+    img.write_to(
+        &mut std::io::Cursor::new(&mut bytes),
+        image::ImageFormat::Png,
+    )?;
     envfield::grid::write_atomic(path, &bytes)?;
     Ok(())
 }

@@ -108,7 +108,9 @@ fn changed(grid: &Grid2, rng: &mut SplitMix64, max_people: usize, max_extra: f32
 fn goal_cell(grid: &Grid2, rng: &mut SplitMix64) -> Option<Cell2> {
     let (labels, sizes) = envfield::scene::free_components(grid);
     let largest = (0..sizes.len()).max_by_key(|&k| sizes[k])?;
-    let cells: Vec<usize> = (0..labels.len()).filter(|&i| labels[i] == largest).collect();
+    let cells: Vec<usize> = (0..labels.len())
+        .filter(|&i| labels[i] == largest)
+        .collect();
     Some(grid.cell(cells[rng.below(cells.len())]))
 }
 
@@ -205,13 +207,18 @@ fn train(args: &Args) -> Result<()> {
     })?;
     bar.finish();
     trainer.averaged_net()?.save(&args.out)?;
-    eprintln!("saved {} (checkpoint {})", args.out.display(), ckpt.display());
+    eprintln!(
+        "saved {} (checkpoint {})",
+        args.out.display(),
+        ckpt.display()
+    );
     println!("{}", serde_json::to_string(&summary)?);
     Ok(())
 }
 
 fn eval(args: &Args) -> Result<()> {
-    let net = FieldNet::load(&args.out).with_context(|| format!("loading {}", args.out.display()))?;
+    let net =
+        FieldNet::load(&args.out).with_context(|| format!("loading {}", args.out.display()))?;
     let mut untrained = FieldNet::new(net.config().clone(), 12345)?;
     untrained.set_rule(net.rule());
     let rule = MoveRule::Strict;

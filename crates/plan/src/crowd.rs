@@ -27,7 +27,7 @@ use std::borrow::Cow;
 
 use dodgy_2d::{Agent, AvoidanceOptions, Obstacle, Vec2};
 use envfield_eikonal::{FastMarching, Order};
-use envfield_grid::{Cell2, Field2, FieldModel, Grid2, Point2};
+use envfield_grid::{Cell2, Field2, FieldModel, Grid2, Point2, SplitMix64};
 use serde::{Deserialize, Serialize};
 
 use crate::{PlanError, Result};
@@ -41,11 +41,6 @@ pub struct CrowdConfig {
     pub step_length: f32,
     /// Time steps before the loop gives up on the people still walking.
     pub max_steps: usize,
-    /// Others are marked on a person's map only within this distance of them:
-    /// `f32::INFINITY` marks everyone, as the paper's Algorithm 1 does; a few steps keeps
-    /// people from detouring around someone far away who will have moved on by the time they
-    /// get there. Nearer people are always avoided by the step check, whatever this is.
-    pub horizon: f32,
     /// Time steps a person held up by others (their way around them more than a step longer
     /// than the way through) waits for the way through to clear before going round.
     pub patience: usize,
@@ -55,13 +50,12 @@ pub struct CrowdConfig {
 
 impl Default for CrowdConfig {
     /// A 0.25 m body and a 0.5 m step on a 0.1 m map, 400 steps (200 s at a step a half
-    /// second), others marked within 1.5 m.
+    /// second).
     fn default() -> Self {
         Self {
             body_radius: 2.5,
             step_length: 5.0,
             max_steps: 400,
-            horizon: 15.0,
             patience: 3,
             directions: 8,
         }
@@ -73,13 +67,12 @@ impl CrowdConfig {
         let positive = |v: f32| v.is_finite() && v > 0.0;
         if !(positive(self.body_radius) && self.step_length.is_finite() && self.step_length >= 1.0)
             || self.max_steps == 0
-            || !(self.horizon >= 0.0)
             || self.directions < 4
         {
             return Err(PlanError::Invalid(format!(
-                "crowd config: body radius > 0, step length >= 1 cell, max_steps >= 1, \
-                 horizon >= 0 and at least 4 directions (got {}, {}, {}, {}, {})",
-                self.body_radius, self.step_length, self.max_steps, self.horizon, self.directions
+                "crowd config: body radius > 0, step length >= 1 cell, max_steps >= 1 and \
+                 at least 4 directions (got {}, {}, {}, {})",
+                self.body_radius, self.step_length, self.max_steps, self.directions
             )));
         }
         Ok(())
@@ -239,6 +232,90 @@ pub fn check_trips(walkable: &Grid2, trips: &[Trip], config: &CrowdConfig) -> Re
     Ok(())
 }
 
+/// `people` random trips on `walkable`, seeded: starts and goals on the largest 4-connected
+/// free region, starts (and goals) at least two body radii and a cell apart, each goal at
+/// least `min_length` cells in a straight line from its start.
+///
+/// # Errors
+/// [`PlanError::Invalid`] when the map has no free cell or that many people cannot be placed
+/// (after `2000 x people` draws).
+pub fn random_trips(
+    walkable: &Grid2,
+    people: usize,
+    config: &CrowdConfig,
+    min_length: f32,
+    seed: u64,
+) -> Result<Vec<Trip>> {
+    config.validate()?;
+    let cells = largest_region(walkable);
+    if cells.is_empty() {
+        return Err(PlanError::Invalid(
+            "the walkable map has no free cell".into(),
+        ));
+    }
+    let apart = 2.0 * config.body_radius + 1.0;
+    let far = |a: Cell2, b: Cell2, d: f32| point(a).distance(point(b)) >= d;
+    let mut rng = SplitMix64::new(seed ^ 0xC0_FFEE);
+    let mut trips: Vec<Trip> = Vec::new();
+    for _ in 0..people.saturating_mul(2000) {
+        if trips.len() == people {
+            break;
+        }
+        let (start, goal) = (cells[rng.below(cells.len())], cells[rng.below(cells.len())]);
+        let separate = trips
+            .iter()
+            .all(|t| far(t.start, start, apart) && far(t.goal, goal, apart));
+        if separate && far(start, goal, min_length) {
+            trips.push(Trip { start, goal });
+        }
+    }
+    if trips.len() < people {
+        return Err(PlanError::Invalid(format!(
+            "could not place {people} people with separate starts and goals on {} free cells \
+             (placed {})",
+            cells.len(),
+            trips.len()
+        )));
+    }
+    Ok(trips)
+}
+
+/// The cells of the largest 4-connected free region of `grid`.
+fn largest_region(grid: &Grid2) -> Vec<Cell2> {
+    let (rows, cols) = (grid.rows(), grid.cols());
+    let mut seen = vec![false; grid.len()];
+    let mut best: Vec<Cell2> = Vec::new();
+    for first in 0..grid.len() {
+        if seen[first] || grid.obstacles()[first] {
+            continue;
+        }
+        seen[first] = true;
+        let mut region = vec![grid.cell(first)];
+        let mut k = 0;
+        while k < region.len() {
+            let c = region[k];
+            k += 1;
+            let next = [
+                (c.row > 0).then(|| Cell2::new(c.row.wrapping_sub(1), c.col)),
+                (c.row + 1 < rows).then(|| Cell2::new(c.row + 1, c.col)),
+                (c.col > 0).then(|| Cell2::new(c.row, c.col.wrapping_sub(1))),
+                (c.col + 1 < cols).then(|| Cell2::new(c.row, c.col + 1)),
+            ];
+            for n in next.into_iter().flatten() {
+                let i = n.row * cols + n.col;
+                if !seen[i] && !grid.obstacles()[i] {
+                    seen[i] = true;
+                    region.push(n);
+                }
+            }
+        }
+        if region.len() > best.len() {
+            best = region;
+        }
+    }
+    best
+}
+
 /// Each person's shortest path length on the empty `walkable` map, in cells (second-order fast
 /// marching): what path ratios divide by.
 ///
@@ -255,7 +332,8 @@ pub fn shortest_lengths(walkable: &Grid2, trips: &[Trip]) -> Result<Vec<f32>> {
 }
 
 /// Algorithm 1 with `model`'s fields (module docs): every person's field on the map the
-/// others change, one batched prediction per time step.
+/// others change, one batched prediction per time step, until everyone has arrived or
+/// `config.max_steps` steps. [`Crowd`] takes the same loop a step at a time.
 ///
 /// # Errors
 /// A bad problem ([`check_trips`]); the model's errors.
@@ -265,36 +343,116 @@ pub fn walk_crowd(
     model: &impl FieldModel,
     config: &CrowdConfig,
 ) -> Result<CrowdRun> {
-    check_trips(walkable, trips, config)?;
-    let n = trips.len();
-    let goals: Vec<Point2> = trips.iter().map(|t| point(t.goal)).collect();
-    let mut pos: Vec<Point2> = trips.iter().map(|t| point(t.start)).collect();
-    let mut run = CrowdRun {
-        frames: vec![pos.clone()],
-        arrived_at: vec![None; n],
-        waits: 0,
-        yields: 0,
-    };
-    // The model's last finite remaining distance per person (priority); the straight line
-    // until there is one.
-    let mut remaining: Vec<f32> = (0..n).map(|i| pos[i].distance(goals[i])).collect();
-    let disc = 2.0 * config.body_radius;
-    // Each person's field on the map without people, and the steps they have waited held up.
-    let statics = model.predict_many(&trips.iter().map(|t| (walkable, t.goal)).collect::<Vec<_>>())?;
-    let mut held = vec![0usize; n];
-    for t in 0..config.max_steps {
-        let walking: Vec<usize> = (0..n).filter(|&i| run.arrived_at[i].is_none()).collect();
+    let mut crowd = Crowd::new(walkable, trips, model, config)?;
+    while crowd.run.steps() < config.max_steps && crowd.step()? {}
+    Ok(crowd.run)
+}
+
+/// Several people on one walkable map, stepped one time step at a time by Algorithm 1
+/// (module docs): for simulations that interleave other work, and for timing one step.
+#[derive(Clone, Debug)]
+pub struct Crowd<'a, M> {
+    walkable: &'a Grid2,
+    trips: Vec<Trip>,
+    model: &'a M,
+    config: CrowdConfig,
+    goals: Vec<Point2>,
+    pos: Vec<Point2>,
+    /// The model's last finite remaining distance per person (priority); the straight line
+    /// until there is one.
+    remaining: Vec<f32>,
+    /// Each person's field on the map without people.
+    statics: Vec<Field2>,
+    /// Steps each person has waited held up.
+    held: Vec<usize>,
+    run: CrowdRun,
+}
+
+impl<'a, M: FieldModel> Crowd<'a, M> {
+    /// Everyone at their start, with each person's field on the empty map (one batched
+    /// prediction).
+    ///
+    /// # Errors
+    /// A bad problem ([`check_trips`]); the model's errors.
+    pub fn new(
+        walkable: &'a Grid2,
+        trips: &[Trip],
+        model: &'a M,
+        config: &CrowdConfig,
+    ) -> Result<Self> {
+        check_trips(walkable, trips, config)?;
+        let n = trips.len();
+        let goals: Vec<Point2> = trips.iter().map(|t| point(t.goal)).collect();
+        let pos: Vec<Point2> = trips.iter().map(|t| point(t.start)).collect();
+        let statics =
+            model.predict_many(&trips.iter().map(|t| (walkable, t.goal)).collect::<Vec<_>>())?;
+        Ok(Self {
+            walkable,
+            trips: trips.to_vec(),
+            model,
+            config: *config,
+            remaining: (0..n).map(|i| pos[i].distance(goals[i])).collect(),
+            goals,
+            run: CrowdRun {
+                frames: vec![pos.clone()],
+                arrived_at: vec![None; n],
+                waits: 0,
+                yields: 0,
+            },
+            pos,
+            statics,
+            held: vec![0; n],
+        })
+    }
+
+    /// Everyone's current position.
+    pub fn positions(&self) -> &[Point2] {
+        &self.pos
+    }
+
+    /// What has happened so far.
+    pub fn run(&self) -> &CrowdRun {
+        &self.run
+    }
+
+    /// The record of every step taken.
+    pub fn into_run(self) -> CrowdRun {
+        self.run
+    }
+
+    /// One time step for everyone still walking. Returns whether anyone still walks
+    /// afterwards (`false` once all have arrived, and then the step does nothing).
+    ///
+    /// # Errors
+    /// The model's errors.
+    pub fn step(&mut self) -> Result<bool> {
+        let n = self.trips.len();
+        let walking: Vec<usize> = (0..n)
+            .filter(|&i| self.run.arrived_at[i].is_none())
+            .collect();
         if walking.is_empty() {
-            break;
+            return Ok(false);
         }
+        let t = self.run.steps() + 1;
+        let Self {
+            walkable,
+            trips,
+            model,
+            config,
+            goals,
+            pos,
+            remaining,
+            statics,
+            held,
+            run,
+        } = self;
+        let (walkable, model) = (*walkable, *model);
+        let disc = 2.0 * config.body_radius;
         let maps: Vec<Grid2> = walking
             .iter()
             .map(|&i| {
-                mark_discs(
-                    walkable,
-                    walking.iter().filter(|&&j| j != i).map(|&j| pos[j]),
-                    disc,
-                )
+                let others = walking.iter().filter(|&&j| j != i);
+                mark_discs(walkable, others.map(|&j| pos[j]), disc)
             })
             .collect::<Result<_>>()?;
         let fields = predict_where_free(model, &maps, walking.iter().map(|&i| trips[i].goal))?;
@@ -320,9 +478,7 @@ pub fn walk_crowd(
                 .iter()
                 .map(|&k| {
                     let i = walking[k];
-                    let ahead = walking.iter().filter(|&&j| {
-                        j != i && rank(j) < rank(i) && pos[j].distance(pos[i]) <= config.horizon
-                    });
+                    let ahead = walking.iter().filter(|&&j| j != i && rank(j) < rank(i));
                     mark_discs(walkable, ahead.map(|&j| pos[j]), disc)
                 })
                 .collect::<Result<_>>()?;
@@ -361,7 +517,16 @@ pub fn walk_crowd(
                 candidates
                     .iter()
                     .filter(|&&p| segment_clear(walkable, pos[i], p) && others(pos[i], p))
-                    .map(|&p| (p, if p == goals[i] { -1.0 } else { value_at(field, p) }))
+                    .map(|&p| {
+                        (
+                            p,
+                            if p == goals[i] {
+                                -1.0
+                            } else {
+                                value_at(field, p)
+                            },
+                        )
+                    })
                     .filter(|&(_, v)| v < here - 1e-3)
                     .min_by(|a, b| a.1.total_cmp(&b.1))
                     .map(|(p, _)| p)
@@ -424,12 +589,12 @@ pub fn walk_crowd(
         for &i in &walking {
             pos[i] = next[i].unwrap_or(pos[i]);
             if pos[i] == goals[i] {
-                run.arrived_at[i] = Some(t + 1);
+                run.arrived_at[i] = Some(t);
             }
         }
         run.frames.push(pos.clone());
+        Ok(run.arrived_at.iter().any(Option::is_none))
     }
-    Ok(run)
 }
 
 /// How the ORCA loop of [`orca_crowd`] looks ahead, in time steps.
@@ -439,6 +604,9 @@ pub struct OrcaConfig {
     pub time_horizon: f32,
     /// How far ahead collisions with the map are avoided.
     pub obstacle_time_horizon: f32,
+    /// ORCA updates per time step (a simulation's small time step: a step of 0.5 m is two
+    /// body radii, too far to move blind).
+    pub substeps: usize,
 }
 
 impl Default for OrcaConfig {
@@ -446,6 +614,7 @@ impl Default for OrcaConfig {
         Self {
             time_horizon: 3.0,
             obstacle_time_horizon: 1.0,
+            substeps: 4,
         }
     }
 }
@@ -465,78 +634,154 @@ pub fn orca_crowd(
     config: &CrowdConfig,
     orca: &OrcaConfig,
 ) -> Result<CrowdRun> {
-    check_trips(walkable, trips, config)?;
-    let n = trips.len();
-    let statics = FastMarching::with_order(Order::Second)
-        .solve2_batch(&trips.iter().map(|t| (walkable, t.goal)).collect::<Vec<_>>())?;
-    let goals: Vec<Point2> = trips.iter().map(|t| point(t.goal)).collect();
-    let mut pos: Vec<Point2> = trips.iter().map(|t| point(t.start)).collect();
-    let mut vel = vec![Vec2::ZERO; n];
-    let mut run = CrowdRun {
-        frames: vec![pos.clone()],
-        arrived_at: vec![None; n],
-        waits: 0,
-        yields: 0,
-    };
-    let options = AvoidanceOptions {
-        obstacle_margin: 0.1,
-        time_horizon: orca.time_horizon,
-        obstacle_time_horizon: orca.obstacle_time_horizon,
-    };
-    let step = config.step_length;
-    let reach = step * (orca.time_horizon + 1.0) + 2.0 * config.body_radius;
-    for t in 0..config.max_steps {
-        let walking: Vec<usize> = (0..n).filter(|&i| run.arrived_at[i].is_none()).collect();
-        if walking.is_empty() {
-            break;
-        }
-        let agent = |i: usize| Agent {
-            position: Vec2::new(pos[i].col, pos[i].row),
-            velocity: vel[i],
-            radius: config.body_radius,
-            avoidance_responsibility: 1.0,
-        };
-        let velocities: Vec<Vec2> = walking
-            .iter()
-            .map(|&i| {
-                let waypoint = candidates(pos[i], goals[i], step, config.directions)
-                    .into_iter()
-                    .filter(|&p| segment_clear(walkable, pos[i], p))
-                    .min_by(|&a, &b| value_at(&statics[i], a).total_cmp(&value_at(&statics[i], b)))
-                    .unwrap_or(pos[i]);
-                let preferred = Vec2::new(waypoint.col - pos[i].col, waypoint.row - pos[i].row);
-                let neighbours: Vec<Cow<Agent>> = walking
-                    .iter()
-                    .filter(|&&j| j != i && pos[j].distance(pos[i]) < reach)
-                    .map(|&j| Cow::Owned(agent(j)))
-                    .collect();
-                let obstacles =
-                    square_obstacles(walkable, pos[i], step * orca.obstacle_time_horizon + 2.0);
-                let obstacles: Vec<Cow<Obstacle>> = obstacles.into_iter().map(Cow::Owned).collect();
-                agent(i).compute_avoiding_velocity(
-                    &neighbours,
-                    &obstacles,
-                    preferred,
-                    step,
-                    1.0,
-                    &options,
-                )
-            })
-            .collect();
-        for (&i, v) in walking.iter().zip(velocities) {
-            vel[i] = v;
-            if v.length() < 1e-3 {
-                run.waits += 1;
-            }
-            pos[i] = Point2::new(pos[i].row + v.y, pos[i].col + v.x);
-            if pos[i].distance(goals[i]) < 0.5 {
-                pos[i] = goals[i];
-                run.arrived_at[i] = Some(t + 1);
-            }
-        }
-        run.frames.push(pos.clone());
+    let mut crowd = OrcaCrowd::new(walkable, trips, config, orca)?;
+    while crowd.run.steps() < config.max_steps && crowd.step() {}
+    Ok(crowd.run)
+}
+
+/// The ORCA loop of [`orca_crowd`], a time step at a time.
+#[derive(Clone, Debug)]
+pub struct OrcaCrowd<'a> {
+    walkable: &'a Grid2,
+    config: CrowdConfig,
+    orca: OrcaConfig,
+    /// Each person's exact field on the empty map (the waypoints' source).
+    statics: Vec<Field2>,
+    goals: Vec<Point2>,
+    pos: Vec<Point2>,
+    vel: Vec<Vec2>,
+    run: CrowdRun,
+}
+
+impl<'a> OrcaCrowd<'a> {
+    /// Everyone at their start, at rest, with their exact fields on the empty map.
+    ///
+    /// # Errors
+    /// A bad problem ([`check_trips`]); solver errors.
+    pub fn new(
+        walkable: &'a Grid2,
+        trips: &[Trip],
+        config: &CrowdConfig,
+        orca: &OrcaConfig,
+    ) -> Result<Self> {
+        check_trips(walkable, trips, config)?;
+        let n = trips.len();
+        let statics = FastMarching::with_order(Order::Second)
+            .solve2_batch(&trips.iter().map(|t| (walkable, t.goal)).collect::<Vec<_>>())?;
+        let pos: Vec<Point2> = trips.iter().map(|t| point(t.start)).collect();
+        Ok(Self {
+            walkable,
+            config: *config,
+            orca: *orca,
+            statics,
+            goals: trips.iter().map(|t| point(t.goal)).collect(),
+            run: CrowdRun {
+                frames: vec![pos.clone()],
+                arrived_at: vec![None; n],
+                waits: 0,
+                yields: 0,
+            },
+            pos,
+            vel: vec![Vec2::ZERO; n],
+        })
     }
-    Ok(run)
+
+    /// What has happened so far.
+    pub fn run(&self) -> &CrowdRun {
+        &self.run
+    }
+
+    /// The record of every step taken.
+    pub fn into_run(self) -> CrowdRun {
+        self.run
+    }
+
+    /// One time step: every walking person's ORCA velocity from the same state, then all
+    /// move. Returns whether anyone still walks afterwards.
+    pub fn step(&mut self) -> bool {
+        let n = self.goals.len();
+        let walking: Vec<usize> = (0..n)
+            .filter(|&i| self.run.arrived_at[i].is_none())
+            .collect();
+        if walking.is_empty() {
+            return false;
+        }
+        let t = self.run.steps() + 1;
+        let Self {
+            walkable,
+            config,
+            orca,
+            statics,
+            goals,
+            pos,
+            vel,
+            run,
+        } = self;
+        let walkable = *walkable;
+        let options = AvoidanceOptions {
+            obstacle_margin: 0.1,
+            time_horizon: orca.time_horizon,
+            obstacle_time_horizon: orca.obstacle_time_horizon,
+        };
+        let step = config.step_length;
+        let reach = step * (orca.time_horizon + 1.0) + 2.0 * config.body_radius;
+        // Velocities are in cells per time step; ORCA moves in `substeps` smaller steps.
+        let dt = 1.0 / orca.substeps.max(1) as f32;
+        let before = pos.clone();
+        for _ in 0..orca.substeps.max(1) {
+            let walking: Vec<usize> = (0..n).filter(|&i| run.arrived_at[i].is_none()).collect();
+            let agent = |i: usize| Agent {
+                position: Vec2::new(pos[i].col, pos[i].row),
+                velocity: vel[i],
+                radius: config.body_radius,
+                avoidance_responsibility: 1.0,
+            };
+            let velocities: Vec<Vec2> = walking
+                .iter()
+                .map(|&i| {
+                    let waypoint = candidates(pos[i], goals[i], step, config.directions)
+                        .into_iter()
+                        .filter(|&p| segment_clear(walkable, pos[i], p))
+                        .min_by(|&a, &b| {
+                            value_at(&statics[i], a).total_cmp(&value_at(&statics[i], b))
+                        })
+                        .unwrap_or(pos[i]);
+                    let preferred = Vec2::new(waypoint.col - pos[i].col, waypoint.row - pos[i].row);
+                    let neighbours: Vec<Cow<Agent>> = walking
+                        .iter()
+                        .filter(|&&j| j != i && pos[j].distance(pos[i]) < reach)
+                        .map(|&j| Cow::Owned(agent(j)))
+                        .collect();
+                    let obstacles =
+                        square_obstacles(walkable, pos[i], step * orca.obstacle_time_horizon + 2.0);
+                    let obstacles: Vec<Cow<Obstacle>> =
+                        obstacles.into_iter().map(Cow::Owned).collect();
+                    agent(i).compute_avoiding_velocity(
+                        &neighbours,
+                        &obstacles,
+                        preferred,
+                        step,
+                        dt,
+                        &options,
+                    )
+                })
+                .collect();
+            for (&i, v) in walking.iter().zip(velocities) {
+                vel[i] = v;
+                pos[i] = Point2::new(pos[i].row + dt * v.y, pos[i].col + dt * v.x);
+                if pos[i].distance(goals[i]) < 0.5 {
+                    pos[i] = goals[i];
+                    run.arrived_at[i] = Some(t);
+                }
+            }
+        }
+        run.waits += walking
+            .iter()
+            .filter(|&&i| before[i].distance(pos[i]) < 0.05)
+            .count();
+        run.frames.push(pos.clone());
+        run.arrived_at.iter().any(Option::is_none)
+    }
 }
 
 /// The blocked cells of `grid` with a free 8-neighbour within `range` cells of `at`, as
@@ -603,7 +848,11 @@ fn predict_where_free(
 ///
 /// # Errors
 /// None in practice (the grid keeps its valid shape).
-pub fn mark_discs(grid: &Grid2, centres: impl Iterator<Item = Point2>, radius: f32) -> Result<Grid2> {
+pub fn mark_discs(
+    grid: &Grid2,
+    centres: impl Iterator<Item = Point2>,
+    radius: f32,
+) -> Result<Grid2> {
     let (rows, cols) = (grid.rows(), grid.cols());
     let mut obstacles = grid.obstacles().to_vec();
     for p in centres {

@@ -55,8 +55,8 @@ mod search3;
 
 pub use astar::{AStar, Octile};
 pub use crowd::{
-    check_trips, closest_approach, mark_discs, orca_crowd, shortest_lengths, walk_crowd, CrowdConfig, CrowdRun,
-    OrcaConfig, Trip,
+    check_trips, closest_approach, mark_discs, orca_crowd, random_trips, shortest_lengths,
+    walk_crowd, Crowd, CrowdConfig, CrowdRun, OrcaConfig, OrcaCrowd, Trip,
 };
 pub use descent::{descend, FieldDescent};
 pub use error::{PlanError, Result};

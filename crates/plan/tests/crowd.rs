@@ -209,4 +209,3 @@ fn bad_problems_get_clear_errors() {
         .to_string();
     assert!(e.contains("cannot be reached"), "{e}");
 }
-
