@@ -19,7 +19,9 @@ use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
 use clap::Parser;
-use envfield::affordance::{align_in_scene, resample_path, walk, AlignConfig, WalkConfig};
+use envfield::affordance::{
+    align_in_scene, resample_path, walk, AffordanceReport, AlignConfig, PoseSequence, WalkConfig,
+};
 use envfield::eikonal::FastMarching;
 use envfield::grid::{Cell2, Field2, FieldModel, Grid2, Point2};
 use envfield::nets::FieldNet;
@@ -121,10 +123,26 @@ struct Tally {
     steps: usize,
     seconds: f64,
     waits: usize,
+    pose_frames: usize,
+    pose_valid: usize,
 }
 
 impl Tally {
-    fn add(&mut self, run: &CrowdRun, shortest: &[f32], walkable: &Grid2, radius: f32, s: f64) {
+    fn add(
+        &mut self,
+        run: &CrowdRun,
+        shortest: &[f32],
+        floor: &Floor,
+        radius: f32,
+        s: f64,
+        gait: &PoseSequence,
+    ) -> Result<()> {
+        let walkable = &floor.walkable;
+        for i in 0..run.people() {
+            let (_, reports) = aligned_walk(floor, run, i, gait)?;
+            self.pose_frames += reports.len();
+            self.pose_valid += reports.iter().filter(|r| r.valid()).count();
+        }
         self.people += run.people();
         self.reached += run.arrived_at.iter().flatten().count();
         self.person_collisions += run.person_collisions(radius);
@@ -137,6 +155,7 @@ impl Tally {
         self.steps += run.steps();
         self.seconds += s;
         self.waits += run.waits;
+        Ok(())
     }
 
     fn json(&self, prefix: &str, out: &mut serde_json::Map<String, serde_json::Value>) {
@@ -154,6 +173,10 @@ impl Tally {
         put(
             "ms_per_step",
             (1e3 * self.seconds / self.steps.max(1) as f64).into(),
+        );
+        put(
+            "pose_valid_pct",
+            (100.0 * self.pose_valid as f64 / self.pose_frames.max(1) as f64).into(),
         );
         put("steps", self.steps.into());
         put("waits", self.waits.into());
@@ -184,39 +207,25 @@ fn main() -> Result<()> {
 fn batch(args: &Args, rooms: usize, model: &FieldNet, config: &CrowdConfig) -> Result<()> {
     let exact = FastMarching::default();
     let (mut learned, mut fmm, mut orca) = (Tally::default(), Tally::default(), Tally::default());
+    let gait = walk(&WalkConfig::default(), args.seed)?;
     for room in args.seed..args.seed + rooms as u64 {
         let scene = generate_room(&RoomConfig::birdseye(), room)?.scene;
         let floor = floor(scene, args.body_radius)?;
         let trips = random_trips(&floor.walkable, args.people, config, 1.0 / RESOLUTION, room)?;
         let shortest = shortest_lengths(&floor.walkable, &trips)?;
-        let w = &floor.walkable;
+        let (w, r) = (&floor.walkable, config.body_radius);
         let t = Instant::now();
         let run = walk_crowd(w, &trips, model, config)?;
-        learned.add(
-            &run,
-            &shortest,
-            w,
-            config.body_radius,
-            t.elapsed().as_secs_f64(),
-        );
+        let s = t.elapsed().as_secs_f64();
+        learned.add(&run, &shortest, &floor, r, s, &gait)?;
         let t = Instant::now();
         let run = walk_crowd(w, &trips, &exact, config)?;
-        fmm.add(
-            &run,
-            &shortest,
-            w,
-            config.body_radius,
-            t.elapsed().as_secs_f64(),
-        );
+        let s = t.elapsed().as_secs_f64();
+        fmm.add(&run, &shortest, &floor, r, s, &gait)?;
         let t = Instant::now();
         let run = orca_crowd(w, &trips, config, &OrcaConfig::default())?;
-        orca.add(
-            &run,
-            &shortest,
-            w,
-            config.body_radius,
-            t.elapsed().as_secs_f64(),
-        );
+        let s = t.elapsed().as_secs_f64();
+        orca.add(&run, &shortest, &floor, r, s, &gait)?;
         if !args.json {
             eprintln!(
                 "room {room}: learned {}/{} exact {}/{} orca {}/{} reached",
@@ -263,13 +272,7 @@ fn one_room(args: &Args, model: &FieldNet, config: &CrowdConfig) -> Result<()> {
     let gait = walk(&WalkConfig::default(), args.seed)?;
     let mut people = Vec::new();
     for (i, trip) in trips.iter().enumerate() {
-        let path: Vec<Point3<f32>> = run.path(i).iter().map(|&p| world(&floor.map, p)).collect();
-        let trajectory = resample_path(&path, gait.step_length())?;
-        let align = AlignConfig {
-            keep_height: true,
-            ..AlignConfig::default()
-        };
-        let (aligned, reports) = align_in_scene(&floor.scene, &gait, &trajectory, &align)?;
+        let (aligned, reports) = aligned_walk(&floor, &run, i, &gait)?;
         aligned.write(args.out.join(format!("walk_{i}.json")))?;
         let valid = reports.iter().filter(|r| r.valid()).count();
         people.push(serde_json::json!({
@@ -318,6 +321,23 @@ fn one_room(args: &Args, model: &FieldNet, config: &CrowdConfig) -> Result<()> {
     Ok(())
 }
 
+/// Person `i`'s walking sequence aligned to their path in `floor`'s scene, and each frame's
+/// support and collision check.
+fn aligned_walk(
+    floor: &Floor,
+    run: &CrowdRun,
+    i: usize,
+    gait: &PoseSequence,
+) -> Result<(PoseSequence, Vec<AffordanceReport>)> {
+    let path: Vec<Point3<f32>> = run.path(i).iter().map(|&p| world(&floor.map, p)).collect();
+    let trajectory = resample_path(&path, gait.step_length())?;
+    let align = AlignConfig {
+        keep_height: true,
+        ..AlignConfig::default()
+    };
+    Ok(align_in_scene(&floor.scene, gait, &trajectory, &align)?)
+}
+
 /// World `(x, y, 0)` of a map point (cell centres at integer coordinates).
 fn world(map: &FloorMap, p: Point2) -> Point3<f32> {
     let f = &map.frame;
@@ -352,7 +372,7 @@ fn render(
     model: &FieldNet,
     config: &CrowdConfig,
 ) -> Result<Vec<RgbaImage>> {
-    const SCALE: u32 = 6;
+    const SCALE: u32 = 8;
     let (rows, cols) = (walkable.rows(), walkable.cols());
     let mut frames = Vec::new();
     for t in 0..run.frames.len() {
@@ -392,7 +412,9 @@ fn render(
                 }
             }
         }
-        // Contours: cells whose field crosses a multiple of 5 cells against a neighbour.
+        // Contours of each person's field within 2 m of them (every 0.5 m): how it bends
+        // round the others. A cell is on one where the field crosses a level against a
+        // neighbour.
         let mut k = 0;
         for (&i, m) in walking.iter().zip(&maps) {
             if !m.is_free(trips[i].goal) {
@@ -405,17 +427,21 @@ fn render(
                     .filter(|v| v.is_finite())
                     .map(|v| (v / 5.0) as i32)
             };
-            let colour = tint(COLOURS[i % 8], 0.55);
+            let colour = tint(COLOURS[i % 8], 0.7);
             for r in 0..rows {
                 for c in 0..cols.saturating_sub(1) {
+                    if Point2::new(r as f32, c as f32).distance(positions[i]) > 20.0 {
+                        continue;
+                    }
                     let (a, b) = (band(Cell2::new(r, c)), band(Cell2::new(r, c + 1)));
                     let down = (r + 1 < rows).then(|| band(Cell2::new(r + 1, c))).flatten();
-                    if a.is_some() && ((b.is_some() && a != b) || (down.is_some() && a != down)) {
+                    // One side of each crossing: the cell on the lower level.
+                    if a.is_some() && ((b.is_some() && a < b) || (down.is_some() && a < down)) {
                         fill(
                             &mut img,
-                            c as u32 * SCALE + 2,
-                            r as u32 * SCALE + 2,
-                            2,
+                            c as u32 * SCALE + SCALE / 2 - 1,
+                            r as u32 * SCALE + SCALE / 2 - 1,
+                            3,
                             colour,
                         );
                     }
@@ -436,7 +462,22 @@ fn render(
                 disc(&mut img, p, config.body_radius, SCALE, colour);
             }
         }
-        frames.push(img);
+        // Only the room: the free cells' bounding box and a cell around it.
+        let (r0, r1, c0, c1) = walkable
+            .free_cells()
+            .fold((rows, 0, cols, 0), |(r0, r1, c0, c1), c| {
+                (r0.min(c.row), r1.max(c.row), c0.min(c.col), c1.max(c.col))
+            });
+        let (r0, c0) = (r0.saturating_sub(1) as u32, c0.saturating_sub(1) as u32);
+        let (r1, c1) = ((r1 + 2).min(rows) as u32, (c1 + 2).min(cols) as u32);
+        let crop = image::imageops::crop_imm(
+            &img,
+            c0 * SCALE,
+            r0 * SCALE,
+            (c1.saturating_sub(c0)) * SCALE,
+            (r1.saturating_sub(r0)) * SCALE,
+        );
+        frames.push(crop.to_image());
     }
     Ok(frames)
 }

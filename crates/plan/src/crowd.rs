@@ -350,7 +350,7 @@ pub fn walk_crowd(
 
 /// Several people on one walkable map, stepped one time step at a time by Algorithm 1
 /// (module docs): for simulations that interleave other work, and for timing one step.
-#[derive(Clone, Debug)]
+#[derive(Debug)]
 pub struct Crowd<'a, M> {
     walkable: &'a Grid2,
     trips: Vec<Trip>,
@@ -366,6 +366,24 @@ pub struct Crowd<'a, M> {
     /// Steps each person has waited held up.
     held: Vec<usize>,
     run: CrowdRun,
+}
+
+// By hand: a derive would ask `M: Clone`, and only the reference is cloned.
+impl<M> Clone for Crowd<'_, M> {
+    fn clone(&self) -> Self {
+        Self {
+            walkable: self.walkable,
+            trips: self.trips.clone(),
+            model: self.model,
+            config: self.config,
+            goals: self.goals.clone(),
+            pos: self.pos.clone(),
+            remaining: self.remaining.clone(),
+            statics: self.statics.clone(),
+            held: self.held.clone(),
+            run: self.run.clone(),
+        }
+    }
 }
 
 impl<'a, M: FieldModel> Crowd<'a, M> {

@@ -1,0 +1,113 @@
+//! Several people on generated floor maps with the shipped bird's-eye field: the batched
+//! prediction matches one-by-one prediction, two people cross a doorway in opposite
+//! directions, and a small crowd in a room it never saw arrives without touching.
+
+use envfield::eikonal::FastMarching;
+use envfield::grid::{Cell2, FieldModel, Grid2};
+use envfield::nets::FieldNet;
+use envfield::plan::{random_trips, walk_crowd, CrowdConfig, Trip};
+use envfield::scene::{floor_map, generate_room, FloorMapConfig, RoomConfig};
+use std::path::Path;
+
+fn shipped() -> FieldNet {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("models/birdseye.safetensors");
+    FieldNet::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// Two rooms joined by a doorway one body wide (centre space, 0.1 m cells).
+fn two_rooms() -> Grid2 {
+    let (rows, cols) = (21, 41);
+    let obstacles = (0..rows * cols)
+        .map(|i| {
+            let (r, c) = (i / cols, i % cols);
+            let border = r < 2 || r >= rows - 2 || c < 2 || c >= cols - 2;
+            border || ((18..=22).contains(&c) && !(9..=11).contains(&r))
+        })
+        .collect();
+    Grid2::from_obstacles(rows, cols, obstacles).unwrap()
+}
+
+fn room_map(seed: u64) -> Grid2 {
+    let room = generate_room(&RoomConfig::birdseye(), seed).unwrap();
+    let config = FloorMapConfig {
+        resolution: 0.1,
+        ..FloorMapConfig::default()
+    };
+    floor_map(&room.scene, &config)
+        .unwrap()
+        .walkable(0.25, Some([64, 64]))
+        .unwrap()
+}
+
+#[test]
+fn one_batched_pass_gives_the_fields_of_one_by_one_prediction() {
+    let net = shipped();
+    let maps: Vec<Grid2> = (0..3).map(|k| room_map(7_000 + k)).collect();
+    let goals: Vec<Cell2> = maps
+        .iter()
+        .map(|m| m.free_cells().nth(40).unwrap())
+        .collect();
+    let problems: Vec<(&Grid2, Cell2)> = maps.iter().zip(goals.iter().copied()).collect();
+    let batched = net.predict_many(&problems).unwrap();
+    for ((map, goal), field) in problems.iter().zip(&batched) {
+        let single = net.field(map, *goal).unwrap();
+        for (a, b) in single.values().iter().zip(field.values()) {
+            assert!(a == b || (a - b).abs() < 1e-4, "{a} vs {b}");
+        }
+    }
+}
+
+#[test]
+fn two_people_cross_a_doorway_on_the_learned_field() {
+    let grid = two_rooms();
+    let config = CrowdConfig::default();
+    let trips = [
+        Trip {
+            start: Cell2::new(10, 5),
+            goal: Cell2::new(12, 36),
+        },
+        Trip {
+            start: Cell2::new(8, 35),
+            goal: Cell2::new(10, 4),
+        },
+    ];
+    let run = walk_crowd(&grid, &trips, &shipped(), &config).unwrap();
+    assert!(
+        run.arrived_at.iter().all(Option::is_some),
+        "{:?}",
+        run.arrived_at
+    );
+    assert_eq!(run.person_collisions(config.body_radius), 0);
+    assert_eq!(run.obstacle_collisions(&grid), 0);
+    assert!(
+        run.waits + run.yields > 0,
+        "the doorway holds one body: someone gave way"
+    );
+}
+
+#[test]
+fn a_crowd_in_an_unseen_room_arrives_without_touching() {
+    // Room seeds far from the training rooms (0..1500).
+    let net = shipped();
+    let config = CrowdConfig::default();
+    let (mut people, mut arrived) = (0, 0);
+    for seed in 900_000..900_005 {
+        let map = room_map(seed);
+        let trips = random_trips(&map, 4, &config, 10.0, seed).unwrap();
+        let run = walk_crowd(&map, &trips, &net, &config).unwrap();
+        assert_eq!(run.person_collisions(config.body_radius), 0, "room {seed}");
+        assert_eq!(run.obstacle_collisions(&map), 0, "room {seed}");
+        people += trips.len();
+        arrived += run.arrived_at.iter().flatten().count();
+        // The exact loop on the same problem for comparison: the learned one is no worse.
+        let exact = walk_crowd(&map, &trips, &FastMarching::default(), &config).unwrap();
+        assert!(
+            run.arrived_at.iter().flatten().count() + 1
+                >= exact.arrived_at.iter().flatten().count()
+        );
+    }
+    assert!(
+        arrived * 100 >= people * 95,
+        "{arrived} of {people} arrived"
+    );
+}
