@@ -185,8 +185,20 @@ impl Tally {
 
 fn main() -> Result<()> {
     let args = Args::parse();
-    if args.people == 0 {
-        bail!("--people must be at least 1");
+    if args.people == 0 || args.rooms == Some(0) {
+        bail!("--people and --rooms must be at least 1");
+    }
+    if !(args.body_radius.is_finite() && args.body_radius > 0.0) {
+        bail!(
+            "--body-radius must be a positive number of metres, got {}",
+            args.body_radius
+        );
+    }
+    if !(args.step_length.is_finite() && args.step_length >= RESOLUTION) {
+        bail!(
+            "--step-length must be at least the map's {RESOLUTION} m cell, got {}",
+            args.step_length
+        );
     }
     let model = FieldNet::load(&args.model)
         .with_context(|| format!("loading the bird's-eye field {}", args.model.display()))?;

@@ -189,3 +189,32 @@ fn room_refuses_absurd_point_counts_and_radii_quickly() {
     refuses(run(&room, &["--scene", &bad, "--out", &out]), "line 1");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn birdseye_multi_refuses_impossible_crowds_and_bad_rooms() {
+    let Some(bin) = example("birdseye_multi") else {
+        return;
+    };
+    let dir = scratch("birdseye");
+    let out = dir.to_string_lossy().into_owned();
+    let model = concat!(env!("CARGO_MANIFEST_DIR"), "/models/birdseye.safetensors");
+    let go = |extra: &[&str]| {
+        let mut args = vec!["--model", model, "--out", &out];
+        args.extend_from_slice(extra);
+        run(&bin, &args)
+    };
+    refuses(go(&["--people", "0"]), "at least 1");
+    // More people than the floor holds, even an absurd count: refused at once.
+    let t = std::time::Instant::now();
+    refuses(go(&["--people", "1000000000"]), "do not fit");
+    assert!(t.elapsed().as_secs() < 30, "{:?}", t.elapsed());
+    refuses(go(&["--people", "60"]), "people");
+    refuses(go(&["--body-radius", "nan"]), "--body-radius");
+    refuses(go(&["--body-radius", "100"]), "no free cell");
+    refuses(go(&["--step-length", "0.01"]), "--step-length");
+    refuses(go(&["--directions", "2"]), "directions");
+    let empty = write(&dir, "empty.obj", "");
+    refuses(go(&["--room", &empty]), "no triangles");
+    refuses(go(&["--rooms", "0", "--json"]), "at least 1");
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -180,10 +180,8 @@ pub fn check_trips(walkable: &Grid2, trips: &[Trip], config: &CrowdConfig) -> Re
             "a crowd needs at least one person".into(),
         ));
     }
-    // Discs of diameter 2r packed in squares: a generous bound on how many fit.
-    let side = 2.0 * config.body_radius;
-    let capacity = (walkable.free_count() as f32 / (side * side)).floor() as usize;
-    if trips.len() > capacity.max(1) {
+    let capacity = capacity(walkable, config);
+    if trips.len() > capacity {
         return Err(PlanError::Invalid(format!(
             "{} people do not fit on {} free cells (at most {capacity} bodies of radius {} cells)",
             trips.len(),
@@ -253,6 +251,14 @@ pub fn random_trips(
             "the walkable map has no free cell".into(),
         ));
     }
+    if people > capacity(walkable, config) {
+        return Err(PlanError::Invalid(format!(
+            "{people} people do not fit on {} free cells (at most {} bodies of radius {} cells)",
+            walkable.free_count(),
+            capacity(walkable, config),
+            config.body_radius
+        )));
+    }
     let apart = 2.0 * config.body_radius + 1.0;
     let far = |a: Cell2, b: Cell2, d: f32| point(a).distance(point(b)) >= d;
     let mut rng = SplitMix64::new(seed ^ 0xC0_FFEE);
@@ -314,6 +320,13 @@ fn largest_region(grid: &Grid2) -> Vec<Cell2> {
         }
     }
     best
+}
+
+/// How many bodies fit on the free floor at most: discs of diameter two body radii packed in
+/// squares (a generous bound; at least 1).
+fn capacity(walkable: &Grid2, config: &CrowdConfig) -> usize {
+    let side = 2.0 * config.body_radius;
+    ((walkable.free_count() as f32 / (side * side)).floor() as usize).max(1)
 }
 
 /// Each person's shortest path length on the empty `walkable` map, in cells (second-order fast
