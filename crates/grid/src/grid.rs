@@ -170,7 +170,7 @@ impl Grid2 {
     /// their coordinates.
     ///
     /// # Errors
-    /// [`GridError::Shape`] when `rows x cols` is smaller than this grid along either axis.
+    /// [`GridError::InvalidShape`] when `rows x cols` is smaller than this grid along either axis.
     pub fn padded(&self, rows: usize, cols: usize) -> Result<Self> {
         if rows < self.rows || cols < self.cols {
             return Err(GridError::InvalidShape {
@@ -305,6 +305,22 @@ impl Grid3 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn padding_keeps_the_cells_and_blocks_the_rest() {
+        let mut g = Grid2::new(2, 3).unwrap();
+        g.set_obstacle(Cell2::new(1, 2), true).unwrap();
+        let p = g.padded(4, 5).unwrap();
+        for r in 0..4 {
+            for c in 0..5 {
+                let cell = Cell2::new(r, c);
+                let expected = if r < 2 && c < 3 { g.is_obstacle(cell) } else { true };
+                assert_eq!(p.is_obstacle(cell), expected, "{cell:?}");
+            }
+        }
+        assert_eq!(g.padded(2, 3).unwrap(), g);
+        assert!(g.padded(1, 5).unwrap_err().to_string().contains("smaller"));
+    }
 
     #[test]
     fn zero_sized_grids_are_rejected() {
