@@ -58,6 +58,37 @@ fn one_batched_pass_gives_the_fields_of_one_by_one_prediction() {
 }
 
 #[test]
+fn the_windowed_batch_of_one_step_matches_one_by_one_prediction() {
+    // One time step's maps: a room with everyone else's disc marked, which the network
+    // answers from its union and a window per map. Discs at the map's edge too.
+    let net = shipped();
+    let room = room_map(7_100);
+    let free: Vec<Cell2> = room.free_cells().collect();
+    let people: Vec<envfield::grid::Point2> = [0, free.len() / 3, free.len() / 2, free.len() - 1]
+        .iter()
+        .map(|&k| envfield::grid::Point2::new(free[k].row as f32, free[k].col as f32))
+        .collect();
+    let maps: Vec<Grid2> = (0..people.len())
+        .map(|i| {
+            let others = (0..people.len()).filter(|&j| j != i).map(|j| people[j]);
+            envfield::plan::mark_discs(&room, others, 5.0).unwrap()
+        })
+        .collect();
+    let goals: Vec<Cell2> = people
+        .iter()
+        .map(|p| Cell2::new(p.row as usize, p.col as usize))
+        .collect();
+    let problems: Vec<(&Grid2, Cell2)> = maps.iter().zip(goals.iter().copied()).collect();
+    let batched = net.predict_many(&problems).unwrap();
+    for ((map, goal), field) in problems.iter().zip(&batched) {
+        let single = net.field(map, *goal).unwrap();
+        for (a, b) in single.values().iter().zip(field.values()) {
+            assert!(a == b || (a - b).abs() < 1e-4, "{a} vs {b}");
+        }
+    }
+}
+
+#[test]
 fn two_people_cross_a_doorway_on_the_learned_field() {
     let grid = two_rooms();
     let config = CrowdConfig::default();

@@ -5,6 +5,7 @@ use crate::kernel::{conv3x3_relu, ConvShape};
 use crate::params::{Init, ParamStore};
 use crate::{NetsError, Result};
 use candle_core::{Device, Tensor};
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::collections::HashMap;
 use std::sync::Mutex;
@@ -347,12 +348,11 @@ impl ConvStack {
             let weight: Vec<f32> = conv.linear.w.flatten_all()?.to_vec1()?;
             let bias: Vec<f32> = conv.linear.b.to_vec1()?;
             let mut y = vec![0.0f32; b * ho * wo * shape.co];
-            for (image, out) in act
-                .chunks_exact(h * w * c)
-                .zip(y.chunks_exact_mut(ho * wo * shape.co))
-            {
-                conv3x3_relu(shape, image, &weight, &bias, *skip, out);
-            }
+            // One image per task: a batch of maps (several people's, one time step) uses
+            // every core.
+            act.par_chunks_exact(h * w * c)
+                .zip(y.par_chunks_exact_mut(ho * wo * shape.co))
+                .for_each(|(image, out)| conv3x3_relu(shape, image, &weight, &bias, *skip, out));
             (act, h, w, c) = (y, ho, wo, shape.co);
         }
         Ok(Tensor::from_vec(act, (b, h, w, c), x.device())?)

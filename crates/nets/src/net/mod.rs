@@ -264,12 +264,113 @@ impl FieldNet {
         Ok(layer.costs(&features)?.flatten_all()?.to_vec1::<f32>()?)
     }
 
+    /// How far a cell's move costs see: the sum of the encoder's dilations (3x3 kernels), or
+    /// `None` when a stride or value-iteration layers make costs depend on more than a window.
+    fn receptive_radius(&self) -> Option<usize> {
+        let ModelConfig::Context(c) = &self.config else {
+            return None;
+        };
+        let plain = c.propagation.is_none() && c.encoder.iter().all(|s| s.stride == 1);
+        plain.then(|| c.encoder.iter().map(|s| s.dilation).sum())
+    }
+
+    /// [`FieldNet::flat_costs`] of same-sized `grids` that are one map changed in a few small
+    /// places (several people's maps of one time step: the floor and everyone else's disc).
+    /// The encoder runs once on their union (every cell blocked in any of them) and, for each
+    /// grid, on a window around where it differs from the union; costs farther than the
+    /// receptive radius from a difference are the union's. Grids that differ widely take the
+    /// plain batched pass. Either way the costs are the plain pass's.
+    fn batch_costs(&self, grids: &[&Grid2]) -> Result<Vec<f32>> {
+        let (Some(radius), Some(first), true) =
+            (self.receptive_radius(), grids.first(), grids.len() > 1)
+        else {
+            return self.flat_costs(grids);
+        };
+        let (rows, cols) = (first.rows(), first.cols());
+        let n = rows * cols;
+        let union: Vec<bool> = (0..n)
+            .map(|k| grids.iter().any(|g| g.obstacles()[k]))
+            .collect();
+        // Per grid, the cells whose costs may differ from the union's: the bounding box of
+        // its differences grown by the radius, as inclusive (r0, r1, c0, c1).
+        let windows: Vec<Option<[usize; 4]>> = grids
+            .iter()
+            .map(|g| {
+                let diff = (0..n).filter(|&k| union[k] && !g.obstacles()[k]);
+                diff.fold(None, |b: Option<[usize; 4]>, k| {
+                    let (r, c) = (k / cols, k % cols);
+                    Some(b.map_or([r, r, c, c], |[r0, r1, c0, c1]| {
+                        [r0.min(r), r1.max(r), c0.min(c), c1.max(c)]
+                    }))
+                })
+                .map(|[r0, r1, c0, c1]| {
+                    [
+                        r0.saturating_sub(radius),
+                        (r1 + radius).min(rows - 1),
+                        c0.saturating_sub(radius),
+                        (c1 + radius).min(cols - 1),
+                    ]
+                })
+            })
+            .collect();
+        // One crop size for all, so the crops go through the encoder as one batch: each
+        // window and the radius around it (clamped to the map, whose edge pads alike).
+        let (ch, cw) = windows
+            .iter()
+            .flatten()
+            .fold((0, 0), |(h, w), &[r0, r1, c0, c1]| {
+                (
+                    h.max((r1 - r0 + 1 + 2 * radius).min(rows)),
+                    w.max((c1 - c0 + 1 + 2 * radius).min(cols)),
+                )
+            });
+        let crops_cells = ch * cw * windows.iter().flatten().count();
+        if 2 * (n + crops_cells) > n * grids.len() {
+            return self.flat_costs(grids);
+        }
+        let union_grid = Grid2::from_obstacles(rows, cols, union)?;
+        let base = self.flat_costs(&[&union_grid])?;
+        let mut origins = Vec::new();
+        let mut crops = Vec::new();
+        for (g, w) in grids.iter().zip(&windows) {
+            let Some([r0, _, c0, _]) = *w else { continue };
+            let (cr, cc) = (
+                r0.saturating_sub(radius).min(rows - ch),
+                c0.saturating_sub(radius).min(cols - cw),
+            );
+            let cells = (0..ch * cw)
+                .map(|k| g.obstacles()[(cr + k / cw) * cols + cc + k % cw])
+                .collect();
+            crops.push(Grid2::from_obstacles(ch, cw, cells)?);
+            origins.push((cr, cc));
+        }
+        let crop_costs = self.flat_costs(&crops.iter().collect::<Vec<_>>())?;
+        let mut out = Vec::with_capacity(grids.len() * n * MOVES);
+        let mut k = 0;
+        for w in &windows {
+            let start = out.len();
+            out.extend_from_slice(&base);
+            let Some([r0, r1, c0, c1]) = *w else { continue };
+            let (cr, cc) = origins[k];
+            let crop = &crop_costs[k * ch * cw * MOVES..(k + 1) * ch * cw * MOVES];
+            k += 1;
+            for r in r0..=r1 {
+                for c in c0..=c1 {
+                    let to = start + (r * cols + c) * MOVES;
+                    let from = ((r - cr) * cw + (c - cc)) * MOVES;
+                    out[to..to + MOVES].copy_from_slice(&crop[from..from + MOVES]);
+                }
+            }
+        }
+        Ok(out)
+    }
+
     /// The fields of a network with a shortest-path readout for same-sized `problems`: the
     /// encoder and the costs without gradients in one pass, then one Dijkstra pass per
     /// problem (in parallel); cells the goal does not reach are infinite.
     fn path_fields(&self, problems: &[(&Grid2, Cell2)]) -> Result<Vec<Field2>> {
         let grids: Vec<&Grid2> = problems.iter().map(|&(g, _)| g).collect();
-        let costs = self.flat_costs(&grids)?;
+        let costs = self.batch_costs(&grids)?;
         let Some(&(first, _)) = problems.first() else {
             return Ok(Vec::new());
         };
