@@ -39,14 +39,8 @@ fn room_map(seed: u64) -> Grid2 {
         .unwrap()
 }
 
-#[test]
-fn one_batched_pass_gives_the_fields_of_one_by_one_prediction() {
-    let net = shipped();
-    let maps: Vec<Grid2> = (0..3).map(|k| room_map(7_000 + k)).collect();
-    let goals: Vec<Cell2> = maps
-        .iter()
-        .map(|m| m.free_cells().nth(40).unwrap())
-        .collect();
+/// `predict_many` on `maps` and `goals` gives what `field` gives for each.
+fn assert_batched_is_one_by_one(net: &FieldNet, maps: &[Grid2], goals: &[Cell2]) {
     let problems: Vec<(&Grid2, Cell2)> = maps.iter().zip(goals.iter().copied()).collect();
     let batched = net.predict_many(&problems).unwrap();
     for ((map, goal), field) in problems.iter().zip(&batched) {
@@ -55,6 +49,17 @@ fn one_batched_pass_gives_the_fields_of_one_by_one_prediction() {
             assert!(a == b || (a - b).abs() < 1e-4, "{a} vs {b}");
         }
     }
+}
+
+#[test]
+fn one_batched_pass_gives_the_fields_of_one_by_one_prediction() {
+    let net = shipped();
+    let maps: Vec<Grid2> = (0..3).map(|k| room_map(7_000 + k)).collect();
+    let goals: Vec<Cell2> = maps
+        .iter()
+        .map(|m| m.free_cells().nth(40).unwrap())
+        .collect();
+    assert_batched_is_one_by_one(&net, &maps, &goals);
 }
 
 #[test]
@@ -78,14 +83,7 @@ fn the_windowed_batch_of_one_step_matches_one_by_one_prediction() {
         .iter()
         .map(|p| Cell2::new(p.row as usize, p.col as usize))
         .collect();
-    let problems: Vec<(&Grid2, Cell2)> = maps.iter().zip(goals.iter().copied()).collect();
-    let batched = net.predict_many(&problems).unwrap();
-    for ((map, goal), field) in problems.iter().zip(&batched) {
-        let single = net.field(map, *goal).unwrap();
-        for (a, b) in single.values().iter().zip(field.values()) {
-            assert!(a == b || (a - b).abs() < 1e-4, "{a} vs {b}");
-        }
-    }
+    assert_batched_is_one_by_one(&net, &maps, &goals);
 }
 
 #[test]

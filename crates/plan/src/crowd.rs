@@ -103,6 +103,16 @@ pub struct CrowdRun {
 }
 
 impl CrowdRun {
+    /// A run that has only its first frame, everyone at `starts`.
+    fn starting(starts: &[Point2]) -> Self {
+        Self {
+            frames: vec![starts.to_vec()],
+            arrived_at: vec![None; starts.len()],
+            waits: 0,
+            yields: 0,
+        }
+    }
+
     /// Number of people.
     pub fn people(&self) -> usize {
         self.arrived_at.len()
@@ -348,6 +358,24 @@ pub fn shortest_lengths(walkable: &Grid2, trips: &[Trip]) -> Result<Vec<f32>> {
 /// others change, one batched prediction per time step, until everyone has arrived or
 /// `config.max_steps` steps. [`Crowd`] takes the same loop a step at a time.
 ///
+/// ```
+/// use envfield_eikonal::FastMarching;
+/// use envfield_grid::{Cell2, Grid2};
+/// use envfield_plan::{walk_crowd, CrowdConfig, Trip};
+///
+/// // An empty 30x30 floor (centre space, 0.1 m cells): two people swap corners.
+/// let floor = Grid2::new(30, 30)?;
+/// let trips = [
+///     Trip { start: Cell2::new(3, 3), goal: Cell2::new(26, 26) },
+///     Trip { start: Cell2::new(26, 26), goal: Cell2::new(3, 3) },
+/// ];
+/// let config = CrowdConfig::default();
+/// let run = walk_crowd(&floor, &trips, &FastMarching::default(), &config)?;
+/// assert!(run.arrived_at.iter().all(Option::is_some));
+/// assert_eq!(run.person_collisions(config.body_radius), 0);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+///
 /// # Errors
 /// A bad problem ([`check_trips`]); the model's errors.
 pub fn walk_crowd(
@@ -424,12 +452,7 @@ impl<'a, M: FieldModel> Crowd<'a, M> {
             config: *config,
             remaining: (0..n).map(|i| pos[i].distance(goals[i])).collect(),
             goals,
-            run: CrowdRun {
-                frames: vec![pos.clone()],
-                arrived_at: vec![None; n],
-                waits: 0,
-                yields: 0,
-            },
+            run: CrowdRun::starting(&pos),
             pos,
             statics,
             held: vec![0; n],
@@ -706,12 +729,7 @@ impl<'a> OrcaCrowd<'a> {
             orca: *orca,
             statics,
             goals: trips.iter().map(|t| point(t.goal)).collect(),
-            run: CrowdRun {
-                frames: vec![pos.clone()],
-                arrived_at: vec![None; n],
-                waits: 0,
-                yields: 0,
-            },
+            run: CrowdRun::starting(&pos),
             pos,
             vel: vec![Vec2::ZERO; n],
         })
