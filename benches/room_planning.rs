@@ -31,7 +31,7 @@ fn bench_rooms(c: &mut Criterion) {
     let seed = 10_000;
     let room = generate_room(&RoomConfig::default(), seed).expect("room");
     // The region exactly as room_nav makes it.
-    let cloud: Vec<[f32; 3]> = sample_surface(&room.scene, vae.config().points, seed)
+    let cloud: Vec<[f32; 3]> = sample_surface(&room.scene, vae.cloud_points(), seed)
         .expect("cloud")
         .iter()
         .map(|p| [p.x, p.y, p.z])

@@ -84,7 +84,7 @@ fn vae_file(args: &Args) -> PathBuf {
 
 /// The VAE's cloud of a scene: its own number of surface points.
 fn cloud(vae: &Cvae, scene: &Scene, seed: u64) -> Result<Vec<[f32; 3]>> {
-    Ok(sample_surface(scene, vae.config().points, seed)?
+    Ok(sample_surface(scene, vae.cloud_points(), seed)?
         .iter()
         .map(|p| [p.x, p.y, p.z])
         .collect())

@@ -301,7 +301,7 @@ fn run_pair(
 }
 
 fn region_of(vae: &Cvae, scene: &Scene, samples: usize, seed: u64) -> Result<AccessibleRegion> {
-    let cloud: Vec<[f32; 3]> = sample_surface(scene, vae.config().points, seed)?
+    let cloud: Vec<[f32; 3]> = sample_surface(scene, vae.cloud_points(), seed)?
         .iter()
         .map(|p| [p.x, p.y, p.z])
         .collect();

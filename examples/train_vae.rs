@@ -63,6 +63,10 @@ struct Args {
     /// Checkpoint every N steps.
     #[arg(long, default_value_t = 500)]
     every: u64,
+    /// The local VAE (`VaeConfig::local`): conditioned on the surface points near an anchor
+    /// instead of the whole room, and sampled at anchors all over the room.
+    #[arg(long)]
+    local: bool,
 }
 
 fn main() -> Result<()> {
@@ -105,11 +109,23 @@ fn main() -> Result<()> {
                 seed: args.seed,
                 checkpoint_every: args.every,
             };
-            VaeTrainer::new(Cvae::new(VaeConfig::default(), args.seed)?, config)?
+            let vae = match args.local {
+                true => VaeConfig::local(),
+                false => VaeConfig::default(),
+            };
+            VaeTrainer::new(Cvae::new(vae, args.seed)?, config)?
         }
     };
     let t = Instant::now();
-    let rooms = rooms_torsos(0..args.rooms, &TorsoDataConfig::default())?;
+    // A local VAE reads neighbourhoods, so its rooms' clouds are denser.
+    let data_config = TorsoDataConfig {
+        cloud_points: trainer
+            .vae()
+            .cloud_points()
+            .max(TorsoDataConfig::default().cloud_points),
+        ..TorsoDataConfig::default()
+    };
+    let rooms = rooms_torsos(0..args.rooms, &data_config)?;
     let data: Vec<_> = rooms.into_iter().map(|(_, d)| d).collect();
     let count = |s: TorsoSource| {
         data.iter()

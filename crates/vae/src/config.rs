@@ -24,6 +24,47 @@ pub struct VaeConfig {
     pub coord_offset: [f32; 3],
     /// See [`VaeConfig::coord_offset`].
     pub coord_scale: f32,
+    /// Local conditioning in place of the whole room's feature: `None` is the paper's cVAE.
+    #[serde(default)]
+    pub local: Option<LocalConfig>,
+}
+
+/// Conditioning on the scene near a place instead of the whole scene. The PointNet reads the
+/// surface points within `radius` (in x and y) of an *anchor*, relative to it; the decoder
+/// gives a torso location relative to the anchor. Sampling draws anchors uniformly over the
+/// cloud's extent in x and y, one torso each, so every part of the room is asked what a
+/// person could do there: a global feature must encode where the seats are, a local one only
+/// what is near. Training anchors are torso locations moved by `jitter`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct LocalConfig {
+    /// Neighbourhood radius in x and y, metres.
+    pub radius: f32,
+    /// Points per neighbourhood (drawn with replacement from those within the radius).
+    pub points: usize,
+    /// Standard deviation of the training anchors around their torso, metres.
+    pub jitter: f32,
+    /// Surface points a room's cloud should hold (dense enough that a neighbourhood sees a
+    /// seat).
+    pub cloud: usize,
+}
+
+impl VaeConfig {
+    /// The local variant ([`LocalConfig`]): neighbourhoods of 0.6 m, 64 points, anchors
+    /// 0.25 m around their torso; relative coordinates enter over 0.6 m, heights about 0.8 m.
+    pub fn local() -> Self {
+        Self {
+            points: 64,
+            coord_offset: [0.0, 0.0, 0.8],
+            coord_scale: 0.6,
+            local: Some(LocalConfig {
+                radius: 0.6,
+                points: 64,
+                jitter: 0.25,
+                cloud: 8192,
+            }),
+            ..Self::default()
+        }
+    }
 }
 
 impl Default for VaeConfig {
@@ -36,6 +77,7 @@ impl Default for VaeConfig {
             layers: 2,
             coord_offset: [3.5, 3.0, 1.0],
             coord_scale: 3.0,
+            local: None,
         }
     }
 }
@@ -67,6 +109,18 @@ impl VaeConfig {
                 "hidden 1..={MAX_WIDTH} and layers 1..=16 (got {} and {})",
                 self.hidden, self.layers
             ));
+        }
+        if let Some(l) = self.local {
+            if !(l.radius.is_finite() && l.radius > 0.0 && l.jitter.is_finite() && l.jitter >= 0.0)
+                || l.points != self.points
+                || !(1..=1 << 22).contains(&l.cloud)
+            {
+                return bad(format!(
+                    "local: a positive radius, a jitter >= 0, points equal to `points` and a \
+                     cloud of 1 to 2^22 points (got {l:?}, points {})",
+                    self.points
+                ));
+            }
         }
         if !(self.coord_offset.iter().all(|v| v.is_finite())
             && self.coord_scale.is_finite()

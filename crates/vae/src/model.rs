@@ -1,6 +1,6 @@
 //! [`Cvae`]: the PointNet scene encoder and the conditional VAE of torso locations.
 
-use crate::{Result, VaeConfig, VaeError};
+use crate::{LocalConfig, Result, VaeConfig, VaeError};
 use candle_core::{Device, Tensor, Var};
 use envfield_grid::SplitMix64;
 use envfield_nets::params::{
@@ -207,6 +207,7 @@ impl Cvae {
     /// # Errors
     /// [`VaeError::InvalidInput`] for an empty cloud or a coordinate that is not finite.
     pub fn scene_feature(&self, points: &[[f32; 3]]) -> Result<Tensor> {
+        self.global_only("scene_feature")?;
         let cloud = self.coords(points, "scene cloud")?.unsqueeze(0)?;
         Ok(self.features(&cloud)?.detach())
     }
@@ -251,6 +252,7 @@ impl Cvae {
     /// [`VaeError::InvalidInput`] for an empty cloud, no torsos or a coordinate that is not
     /// finite.
     pub fn encode(&self, points: &[[f32; 3]], torsos: &[[f32; 3]]) -> Result<(Tensor, Tensor)> {
+        self.global_only("encode")?;
         let feature = self.scene_feature(points)?;
         let t = self.coords(torsos, "torso locations")?;
         let (mean, log_var) = self.encode_with(&Self::repeat(&feature, torsos.len())?, &t)?;
@@ -264,6 +266,7 @@ impl Cvae {
     /// [`VaeError::InvalidInput`] for an empty cloud, a bad coordinate or a `z` that is not
     /// (n, latent).
     pub fn decode(&self, points: &[[f32; 3]], z: &Tensor) -> Result<Vec<[f32; 3]>> {
+        self.global_only("decode")?;
         let feature = self.scene_feature(points)?;
         let (n, l) = z.dims2().map_err(|_| {
             VaeError::InvalidInput(format!(
@@ -284,7 +287,8 @@ impl Cvae {
     }
 
     /// `n` torso locations drawn for the scene of `points`: codes from the standard normal
-    /// (seeded), decoded.
+    /// (seeded), decoded. A local VAE ([`LocalConfig`]) draws one anchor per sample uniformly
+    /// over the cloud's extent in x and y and decodes next to it.
     ///
     /// # Errors
     /// As [`Cvae::decode`]; `n` of 0 or above 10 million.
@@ -296,7 +300,71 @@ impl Cvae {
         }
         let z = normals(n * self.config.latent, seed);
         let z = Tensor::from_vec(z, (n, self.config.latent), &self.device)?;
-        self.decode(points, &z)
+        match self.config.local {
+            Some(local) => self.sample_local(&local, points, &z, seed),
+            None => self.decode(points, &z),
+        }
+    }
+
+    /// How many surface points a scene's cloud should hold for this VAE: the config's
+    /// `points` for the paper's VAE, the local config's `cloud` for a local one.
+    pub fn cloud_points(&self) -> usize {
+        self.config.local.map_or(self.config.points, |l| l.cloud)
+    }
+
+    /// An error for the APIs that read one feature of the whole scene, on a local VAE.
+    fn global_only(&self, what: &str) -> Result<()> {
+        match self.config.local {
+            Some(_) => Err(VaeError::InvalidInput(format!(
+                "{what}: this VAE conditions on neighbourhoods, not on the whole scene; draw \
+                 from it with sample()"
+            ))),
+            None => Ok(()),
+        }
+    }
+
+    /// The local sampler: anchors uniform over the cloud's x-y extent (seeded), each one's
+    /// neighbourhood through the PointNet, the decoder's relative torso moved to the anchor.
+    /// In chunks, so the per-point activations stay small.
+    fn sample_local(
+        &self,
+        local: &LocalConfig,
+        points: &[[f32; 3]],
+        z: &Tensor,
+        seed: u64,
+    ) -> Result<Vec<[f32; 3]>> {
+        let index = XyIndex::new(points, local.radius, "scene cloud")?;
+        let n = z.dim(0)?;
+        let mut rng = SplitMix64::new(seed ^ 0xA11C_4035);
+        let [x0, y0, x1, y1] = index.extent;
+        let anchors: Vec<[f32; 2]> = (0..n)
+            .map(|_| {
+                [
+                    x0 + (x1 - x0) * rng.next_f32(),
+                    y0 + (y1 - y0) * rng.next_f32(),
+                ]
+            })
+            .collect();
+        let mut out = Vec::with_capacity(n);
+        const CHUNK: usize = 512;
+        for (c, chunk) in anchors.chunks(CHUNK).enumerate() {
+            let hood: Vec<[f32; 3]> = chunk
+                .iter()
+                .flat_map(|&a| index.neighbourhood(points, a, local, &mut rng))
+                .collect();
+            let clouds =
+                self.coords(&hood, "neighbourhoods")?
+                    .reshape((chunk.len(), local.points, 3))?;
+            let feature = self.features(&clouds)?;
+            let zc = z.narrow(0, c * CHUNK, chunk.len())?;
+            let rel = self.to_metres(&self.decode_with(&zc, &feature)?)?;
+            out.extend(
+                rel.iter()
+                    .zip(chunk)
+                    .map(|(t, a)| [t[0] + a[0], t[1] + a[1], t[2]]),
+            );
+        }
+        Ok(out)
     }
 
     /// (n, 3) normalised coordinates back to metres.
@@ -406,6 +474,99 @@ impl Cvae {
 }
 
 /// `n` standard-normal draws (Box-Muller) from `seed`.
+/// A cloud's points binned in x-y squares of the neighbourhood radius, for neighbourhood
+/// queries in 3x3 bins.
+pub(crate) struct XyIndex {
+    /// `[x0, y0, x1, y1]` of the cloud.
+    pub(crate) extent: [f32; 4],
+    cell: f32,
+    cols: usize,
+    rows: usize,
+    bins: Vec<Vec<u32>>,
+}
+
+impl XyIndex {
+    /// Bins `cloud` (checked non-empty and finite; `what` names it in errors).
+    pub(crate) fn new(cloud: &[[f32; 3]], radius: f32, what: &str) -> Result<Self> {
+        if cloud.is_empty() {
+            return Err(VaeError::InvalidInput(format!("{what}: no points")));
+        }
+        if let Some(i) = cloud.iter().position(|p| !p.iter().all(|v| v.is_finite())) {
+            return Err(VaeError::InvalidInput(format!(
+                "{what}: point {i} is not finite: {:?}",
+                cloud[i]
+            )));
+        }
+        let fold =
+            |f: fn(f32, f32) -> f32, a: usize, init: f32| cloud.iter().map(|p| p[a]).fold(init, f);
+        let extent = [
+            fold(f32::min, 0, f32::INFINITY),
+            fold(f32::min, 1, f32::INFINITY),
+            fold(f32::max, 0, f32::NEG_INFINITY),
+            fold(f32::max, 1, f32::NEG_INFINITY),
+        ];
+        // Bins no smaller than the radius, and at most 2^20 of them.
+        let span = (extent[2] - extent[0]).max(extent[3] - extent[1]);
+        let cell = radius.max(span / 1024.0).max(1e-3);
+        let cols = ((extent[2] - extent[0]) / cell) as usize + 1;
+        let rows = ((extent[3] - extent[1]) / cell) as usize + 1;
+        let mut bins = vec![Vec::new(); rows * cols];
+        for (i, p) in cloud.iter().enumerate() {
+            let (c, r) = (
+                ((p[0] - extent[0]) / cell) as usize,
+                ((p[1] - extent[1]) / cell) as usize,
+            );
+            bins[r.min(rows - 1) * cols + c.min(cols - 1)].push(i as u32);
+        }
+        Ok(Self {
+            extent,
+            cell,
+            cols,
+            rows,
+            bins,
+        })
+    }
+
+    /// `local.points` points drawn with replacement from those of `cloud` within the radius
+    /// of `anchor` in x-y, as `[dx, dy, z]` relative to it; `[0, 0, -0.5]` each when there is
+    /// none (nothing here: below the floor).
+    pub(crate) fn neighbourhood(
+        &self,
+        cloud: &[[f32; 3]],
+        anchor: [f32; 2],
+        local: &LocalConfig,
+        rng: &mut SplitMix64,
+    ) -> Vec<[f32; 3]> {
+        let (c, r) = (
+            ((anchor[0] - self.extent[0]) / self.cell).floor() as isize,
+            ((anchor[1] - self.extent[1]) / self.cell).floor() as isize,
+        );
+        let r2 = local.radius * local.radius;
+        let mut near = Vec::new();
+        for dr in -1..=1 {
+            for dc in -1..=1 {
+                let (br, bc) = (r + dr, c + dc);
+                if br < 0 || bc < 0 || br >= self.rows as isize || bc >= self.cols as isize {
+                    continue;
+                }
+                for &i in &self.bins[br as usize * self.cols + bc as usize] {
+                    let p = cloud[i as usize];
+                    let (dx, dy) = (p[0] - anchor[0], p[1] - anchor[1]);
+                    if dx * dx + dy * dy <= r2 {
+                        near.push([dx, dy, p[2]]);
+                    }
+                }
+            }
+        }
+        if near.is_empty() {
+            return vec![[0.0, 0.0, -0.5]; local.points];
+        }
+        (0..local.points)
+            .map(|_| near[rng.below(near.len())])
+            .collect()
+    }
+}
+
 pub(crate) fn normals(n: usize, seed: u64) -> Vec<f32> {
     let mut rng = SplitMix64::new(seed ^ 0x5EED_0F2A);
     let unit = |rng: &mut SplitMix64| ((rng.next_u64() >> 11) as f64 + 0.5) / (1u64 << 53) as f64;

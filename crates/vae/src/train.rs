@@ -1,7 +1,7 @@
 //! [`VaeTrainer`]: Adam on reconstruction plus cyclically annealed KL, seeded batches from
 //! [`RoomTorsos`], atomic checkpoints that resume exactly.
 
-use crate::model::{normals, FORMAT};
+use crate::model::{normals, XyIndex, FORMAT};
 use crate::{Cvae, Result, RoomTorsos, TorsoSource, VaeError, VaeTrainConfig};
 use candle_core::Tensor;
 use envfield_grid::SplitMix64;
@@ -77,11 +77,58 @@ impl VaeTrainer {
         self.config.steps = steps;
     }
 
-    /// The batch of `step`: `scenes_per_step` rooms drawn with replacement, each cloud cut to
-    /// the config's point count (a random subset), and `torsos_per_scene` torso locations per
-    /// room with replacement, plus the reparameterisation noise; all from `(seed, step)`, so
-    /// a resumed run draws what the uninterrupted one would have.
-    fn batch(&self, data: &[RoomTorsos], step: u64) -> Result<(Tensor, Tensor, Tensor)> {
+    /// A draw of one of `room`'s torso indices: a kind by `source_weights` among the kinds
+    /// the room has, then a torso of that kind (any torso when no kind has weight).
+    fn kind_picker<'r>(&self, room: &'r RoomTorsos) -> impl Fn(&mut SplitMix64) -> usize + 'r {
+        const KINDS: [TorsoSource; 4] = [
+            TorsoSource::Walk,
+            TorsoSource::Sit,
+            TorsoSource::Lie,
+            TorsoSource::Stand,
+        ];
+        let by_kind: Vec<Vec<usize>> = KINDS
+            .iter()
+            .map(|&s| {
+                (0..room.torsos.len())
+                    .filter(|&i| room.sources[i] == s)
+                    .collect()
+            })
+            .collect();
+        let weights: Vec<f32> = (0..4)
+            .map(|j| match by_kind[j].is_empty() {
+                true => 0.0,
+                false => self.config.source_weights[j],
+            })
+            .collect();
+        let total: f32 = weights.iter().sum();
+        let all = room.torsos.len();
+        move |rng: &mut SplitMix64| {
+            if total <= 0.0 {
+                return rng.below(all);
+            }
+            let mut u = rng.next_f32() * total;
+            let j = (0..4)
+                .find(|&j| {
+                    u -= weights[j];
+                    u < 0.0 && weights[j] > 0.0
+                })
+                .unwrap_or_else(|| (0..4).rfind(|&j| weights[j] > 0.0).unwrap_or(0));
+            by_kind[j][rng.below(by_kind[j].len())]
+        }
+    }
+
+    /// One step's batch: `(clouds, torsos, eps)`, normalised. For the paper's VAE,
+    /// `scenes_per_step` rooms' clouds of `points` points and `torsos_per_scene` torso
+    /// locations each. For a local VAE, `scenes_per_step x torsos_per_scene` torso locations,
+    /// each with its own neighbourhood around an anchor `jitter` away, the torso relative to
+    /// it (`index` holds each room's binned cloud). Torsos are drawn by kind with
+    /// `source_weights` among the kinds a room has.
+    fn batch(
+        &self,
+        data: &[RoomTorsos],
+        index: &[XyIndex],
+        step: u64,
+    ) -> Result<(Tensor, Tensor, Tensor)> {
         let mut rng = SplitMix64::new(self.config.seed ^ step.wrapping_mul(0x9E37_79B9_7F4A_7C15));
         let (b, k, n) = (
             self.config.scenes_per_step,
@@ -89,49 +136,34 @@ impl VaeTrainer {
             self.vae.config().points,
         );
         let (mut cloud, mut torsos) = (Vec::with_capacity(b * n), Vec::with_capacity(b * k));
-        let kinds = [
-            TorsoSource::Walk,
-            TorsoSource::Sit,
-            TorsoSource::Lie,
-            TorsoSource::Stand,
-        ];
+        let local = self.vae.config().local;
         for _ in 0..b {
-            let room = &data[rng.below(data.len())];
-            for _ in 0..n {
-                cloud.push(room.cloud[rng.below(room.cloud.len())]);
+            let r = rng.below(data.len());
+            let room = &data[r];
+            if local.is_none() {
+                for _ in 0..n {
+                    cloud.push(room.cloud[rng.below(room.cloud.len())]);
+                }
             }
-            // The room's torsos by kind, and the kinds' weights among those it has.
-            let by_kind: Vec<Vec<usize>> = kinds
-                .iter()
-                .map(|&s| {
-                    (0..room.torsos.len())
-                        .filter(|&i| room.sources[i] == s)
-                        .collect()
-                })
-                .collect();
-            let weights: Vec<f32> = (0..4)
-                .map(|j| match by_kind[j].is_empty() {
-                    true => 0.0,
-                    false => self.config.source_weights[j],
-                })
-                .collect();
-            let total: f32 = weights.iter().sum();
+            let pick = self.kind_picker(room);
             for _ in 0..k {
-                let i = if total > 0.0 {
-                    let mut u = rng.next_f32() * total;
-                    let j = (0..4)
-                        .find(|&j| {
-                            u -= weights[j];
-                            u < 0.0 && weights[j] > 0.0
-                        })
-                        .unwrap_or_else(|| (0..4).rfind(|&j| weights[j] > 0.0).unwrap_or(0));
-                    by_kind[j][rng.below(by_kind[j].len())]
-                } else {
-                    rng.below(room.torsos.len())
-                };
-                torsos.push(room.torsos[i]);
+                let t = room.torsos[pick(&mut rng)];
+                match &local {
+                    None => torsos.push(t),
+                    Some(l) => {
+                        let g = normals(2, rng.next_u64());
+                        let anchor = [t[0] + l.jitter * g[0], t[1] + l.jitter * g[1]];
+                        cloud.extend(index[r].neighbourhood(&room.cloud, anchor, l, &mut rng));
+                        torsos.push([t[0] - anchor[0], t[1] - anchor[1], t[2]]);
+                    }
+                }
             }
         }
+        // A local batch is b * k neighbourhoods with one torso each.
+        let (b, k) = match local {
+            Some(_) => (b * k, 1),
+            None => (b, k),
+        };
         let cloud = self
             .vae
             .coords(&cloud, "training clouds")?
@@ -170,11 +202,20 @@ impl VaeTrainer {
                  source per torso location"
             )));
         }
+        // Each room's binned cloud, for a local VAE's neighbourhoods.
+        let index: Vec<XyIndex> = match self.vae.config().local {
+            Some(l) => data
+                .iter()
+                .enumerate()
+                .map(|(i, r)| XyIndex::new(&r.cloud, l.radius, &format!("training room {i}")))
+                .collect::<Result<_>>()?,
+            None => Vec::new(),
+        };
         let start = Instant::now();
         let mut last = None;
         while self.step() < self.config.steps {
             let step = self.step();
-            let (cloud, torsos, eps) = self.batch(data, step)?;
+            let (cloud, torsos, eps) = self.batch(data, &index, step)?;
             let kl_weight = self.config.kl_weight(step);
             let sigma = self.config.recon_sigma / self.vae.config().coord_scale;
             let loss = self.vae.loss(&cloud, &torsos, &eps, kl_weight, sigma)?;

@@ -318,3 +318,77 @@ fn the_learned_field_approaches_the_exact_one() {
     let other = box_region([8, 8, 4], 0.1);
     assert!(LearnedField3::new(&net, &other, Cell3::new(1, 1, 1)).is_err());
 }
+
+/// The local VAE: it learns from neighbourhoods, samples over the whole room at anchors, keeps
+/// its samples near the anchors' neighbourhoods, and refuses the whole-scene APIs.
+#[test]
+fn the_local_vae_trains_samples_over_the_room_and_refuses_whole_scene_calls() {
+    let local = VaeConfig {
+        pointnet: vec![16, 32],
+        latent: 4,
+        hidden: 32,
+        ..VaeConfig::local()
+    };
+    let room = generate_room(&RoomConfig::default(), 3).unwrap();
+    let data = vec![room_torsos(
+        &room,
+        &TorsoDataConfig {
+            walks: 1,
+            cloud_points: 4096,
+            ..TorsoDataConfig::default()
+        },
+        3,
+    )
+    .unwrap()];
+    let config = VaeTrainConfig {
+        lr: 1e-3,
+        steps: 60,
+        scenes_per_step: 2,
+        torsos_per_scene: 16,
+        checkpoint_every: 0,
+        ..VaeTrainConfig::default()
+    };
+    let mut trainer = VaeTrainer::new(Cvae::new(local.clone(), 1).unwrap(), config).unwrap();
+    let mut losses = Vec::new();
+    trainer
+        .run(&data, None, |p| {
+            losses.push(p.recon);
+            true
+        })
+        .unwrap();
+    assert!(
+        losses[50..].iter().sum::<f32>() < losses[..10].iter().sum::<f32>(),
+        "{losses:?}"
+    );
+    let vae = trainer.vae();
+    assert_eq!(vae.cloud_points(), 8192);
+    let samples = vae.sample(&data[0].cloud, 400, 5).unwrap();
+    assert_eq!(
+        samples,
+        vae.sample(&data[0].cloud, 400, 5).unwrap(),
+        "seeded"
+    );
+    // Anchors cover the room: samples spread over both halves of it in x and y.
+    let [w, d] = room.size;
+    for (axis, size) in [(0, w), (1, d)] {
+        let low = samples.iter().filter(|s| s[axis] < size / 2.0).count();
+        assert!(
+            (40..360).contains(&low),
+            "axis {axis}: {low} of 400 in the lower half"
+        );
+    }
+    for call in [
+        vae.scene_feature(&data[0].cloud).map(|_| ()),
+        vae.encode(&data[0].cloud, &[[1.0, 1.0, 1.0]]).map(|_| ()),
+    ] {
+        let e = call.unwrap_err().to_string();
+        assert!(e.contains("neighbourhoods"), "{e}");
+    }
+    assert!(vae.sample(&[], 5, 0).is_err());
+    assert!(vae.sample(&[[0.0, f32::NAN, 0.0]], 5, 0).is_err());
+    let bad = VaeConfig {
+        points: 32,
+        ..VaeConfig::local()
+    };
+    assert!(Cvae::new(bad, 0).unwrap_err().to_string().contains("local"));
+}
