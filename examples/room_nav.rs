@@ -102,6 +102,8 @@ const PLANNERS: [&str; 8] = [
 #[derive(Clone, Debug, Default)]
 struct Outcome {
     reached: bool,
+    /// The search opened every allowed point: no allowed route on its lattice (ours only).
+    no_route: bool,
     dist_m: f64,
     seconds: f64,
     path_ratio: f64,
@@ -284,6 +286,7 @@ fn run_pair(
         let (support, free, valid, aligned) = fit(&poses, &path.points, !ours)?;
         let o = Outcome {
             reached: path.reached,
+            no_route: path.exhausted,
             dist_m: path.final_distance as f64,
             seconds,
             path_ratio: if path.reached && shortest > 0.0 {
@@ -636,6 +639,10 @@ fn main() -> Result<()> {
         let free = mean(&os.iter().map(|o| o.free).collect::<Vec<_>>());
         let valid = mean(&os.iter().map(|o| o.valid).collect::<Vec<_>>());
         line[format!("{name}_reach_pct")] = reach.into();
+        if name.starts_with("ours") {
+            let none = 100.0 * os.iter().filter(|o| o.no_route).count() as f64 / n;
+            line[format!("{name}_no_route_pct")] = none.into();
+        }
         line[format!("{name}_dist_m")] = dist.into();
         line[format!("{name}_s")] = secs.into();
         line[format!("{name}_path_ratio")] = ratio.into();

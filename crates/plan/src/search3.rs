@@ -41,6 +41,11 @@ pub struct Path3 {
     pub reached: bool,
     /// Distance from the last point to the goal, metres.
     pub final_distance: f32,
+    /// The search opened every point its filter allows before reaching the goal or spending
+    /// its budget: no allowed route to the goal exists on its lattice. Only
+    /// [`FieldSearch3::search`] sets it.
+    #[serde(default)]
+    pub exhausted: bool,
 }
 
 impl Path3 {
@@ -52,6 +57,7 @@ impl Path3 {
             points,
             reached: d <= tolerance,
             final_distance: d,
+            exhausted: false,
         }
     }
 
@@ -152,8 +158,10 @@ impl FieldSearch3 {
         open.push(Reverse((Order(start_value), 0usize)));
         let mut nearest = (distance(start, goal), 0usize);
         let mut end = None;
+        let mut exhausted = false;
         for _ in 0..self.max_steps {
             let Some(Reverse((_, n))) = open.pop() else {
+                exhausted = true;
                 break;
             };
             let (here, _, depth) = nodes[n];
@@ -192,7 +200,10 @@ impl FieldSearch3 {
             at = nodes[at].1;
         }
         chain.reverse();
-        Ok(Path3::ending(chain, goal, self.tolerance))
+        Ok(Path3 {
+            exhausted,
+            ..Path3::ending(chain, goal, self.tolerance)
+        })
     }
 }
 
@@ -272,6 +283,30 @@ mod tests {
         }
     }
 
+    /// A walled-in start: the search opens every point of the box and says so.
+    #[test]
+    fn a_start_walled_in_by_the_filter_exhausts_the_search() {
+        struct Cube;
+        impl StepFilter for Cube {
+            fn keep(&self, _: usize, _: Point3m, c: &[Point3m]) -> Result<Vec<bool>> {
+                Ok(c.iter().map(|p| p.iter().all(|v| v.abs() <= 0.3)).collect())
+            }
+        }
+        let goal = [1.0, 0.0, 0.0];
+        let search = FieldSearch3 {
+            step: 0.1,
+            tolerance: 0.02,
+            max_steps: 100_000,
+        };
+        let path = search.search(&Cone(goal), &Cube, [0.0; 3], goal).unwrap();
+        assert!(!path.reached && path.exhausted, "{path:?}");
+        assert!((path.final_distance - 0.7).abs() < 0.05, "{path:?}");
+        let open = search
+            .search(&Cone(goal), &AnyStep, [0.0; 3], goal)
+            .unwrap();
+        assert!(open.reached && !open.exhausted);
+    }
+
     #[test]
     fn the_search_walks_a_cone_to_its_goal_near_the_straight_line() {
         let goal = [2.0, 1.0, 1.0];
@@ -309,6 +344,10 @@ mod tests {
             .search(&Cone(goal), &Above(0.5), [0.0, 0.0, 1.0], goal)
             .unwrap();
         assert!(!path.reached);
+        assert!(
+            !path.exhausted,
+            "the half-space above z = 0.5 has points left to open"
+        );
         assert!(path.points.iter().all(|p| p[2] >= 0.5 - 1e-6));
         assert!(path.final_distance > 0.4);
         let bad = FieldSearch3 {

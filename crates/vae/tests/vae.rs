@@ -294,6 +294,37 @@ fn the_exact_field_of_an_open_box_is_the_distance() {
     assert!(field.value([f32::NAN, 0.0, 0.0]).is_err());
 }
 
+/// Near a wall the exact field stays finite in every accessible voxel (trilinear over the
+/// accessible corners) and infinite in the wall, and matches plain trilinear in the open.
+#[test]
+fn the_exact_field_is_finite_up_to_the_regions_faces() {
+    let mut region = box_region([10, 6, 3], 0.1);
+    let mut grid = region.grid.clone();
+    for y in 0..6 {
+        for z in 0..3 {
+            grid.set_obstacle(Cell3::new(7, y, z), true).unwrap();
+        }
+    }
+    region = AccessibleRegion::new(region.frame, grid, region.samples.clone(), 1).unwrap();
+    let field = ExactField3::at_cell(&region, Cell3::new(1, 3, 1)).unwrap();
+    // x = 0.68 m is in voxel 6 (accessible), between its centre (0.65) and the wall's (0.75).
+    let near_wall = field.value([0.68, 0.35, 0.15]).unwrap();
+    let centre = field.value([0.65, 0.35, 0.15]).unwrap();
+    assert!(
+        near_wall.is_finite() && (near_wall - centre).abs() < 1e-4,
+        "{near_wall} {centre}"
+    );
+    assert!(field.value([0.695, 0.35, 0.15]).unwrap().is_finite());
+    assert!(field.value([0.76, 0.35, 0.15]).unwrap().is_infinite());
+    // In the open, the mean of the corners.
+    let (a, b) = (
+        field.value([0.35, 0.35, 0.15]).unwrap(),
+        field.value([0.45, 0.35, 0.15]).unwrap(),
+    );
+    let mid = field.value([0.40, 0.35, 0.15]).unwrap();
+    assert!((mid - 0.5 * (a + b)).abs() < 1e-4, "{mid} {a} {b}");
+}
+
 /// A short training of the learned field on a small box gets within a few voxels of the exact
 /// field on held-out goals; a network of another lattice is refused.
 #[test]
@@ -391,4 +422,26 @@ fn the_local_vae_trains_samples_over_the_room_and_refuses_whole_scene_calls() {
         ..VaeConfig::local()
     };
     assert!(Cvae::new(bad, 0).unwrap_err().to_string().contains("local"));
+}
+
+/// The shipped local VAE loads as a local VAE and, on a room it never saw, puts most of its
+/// kept samples where a pose is supported and collision-free and some within 0.15 m of a
+/// seat's sitting torso (the README's figures are over 20 rooms and 6000 samples).
+#[test]
+fn the_shipped_local_vae_samples_an_unseen_room() {
+    let file =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/vae_local.safetensors");
+    let vae = Cvae::load(&file).unwrap();
+    assert!(vae.config().local.is_some());
+    let room = generate_room(&RoomConfig::default(), 10_003).unwrap();
+    let points: Vec<[f32; 3]> = envfield_scene::sample_surface(&room.scene, vae.cloud_points(), 3)
+        .unwrap()
+        .iter()
+        .map(|p| [p.x, p.y, p.z])
+        .collect();
+    let samples = vae.sample(&points, 1500, 3).unwrap();
+    let q = envfield_vae::region_quality(&room, &samples, &RegionConfig::default()).unwrap();
+    assert!(q.affordable_pct > 60.0, "{q:?}");
+    assert!(q.floor_coverage_pct > 90.0, "{q:?}");
+    assert!(q.seat_coverage_pct > 0.0, "{q:?}");
 }
