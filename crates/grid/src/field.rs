@@ -205,6 +205,34 @@ impl Field3 {
     /// # Errors
     /// [`GridError::NotFinite`] or [`GridError::Invalid`] (outside the field).
     pub fn sample(&self, p: Point3) -> Result<f32> {
+        Ok(lerp_inf(&self.corners(p)?))
+    }
+
+    /// Trilinear interpolation over the finite corners only, their weights renormalised;
+    /// infinite when the cell holding `p` (the nearest cell centre) is. Where infinity marks
+    /// obstacles, this is finite everywhere in a free cell, right up to its faces, which
+    /// [`Field3::sample`] is not within half a cell of an obstacle.
+    ///
+    /// # Errors
+    /// As [`Field3::sample`].
+    pub fn sample_finite(&self, p: Point3) -> Result<f32> {
+        let corners = self.corners(p)?;
+        let [nx, ny, nz] = self.shape;
+        let round = |v: f32, n: usize| (v.round() as usize).min(n - 1);
+        let holder = self.values[(round(p.x, nx) * ny + round(p.y, ny)) * nz + round(p.z, nz)];
+        if !holder.is_finite() {
+            return Ok(f32::INFINITY);
+        }
+        let (acc, weight) = corners
+            .iter()
+            .filter(|(v, w)| *w > 0.0 && v.is_finite())
+            .fold((0.0f32, 0.0f32), |(a, t), (v, w)| (a + v * w, t + w));
+        // The holding cell is finite and weighs at least 1/8.
+        Ok(acc / weight)
+    }
+
+    /// The eight (value, trilinear weight) corners around `p`.
+    fn corners(&self, p: Point3) -> Result<[(f32, f32); 8]> {
         let [nx, ny, nz] = self.shape;
         check_point("x", p.x, nx)?;
         check_point("y", p.y, ny)?;
@@ -226,7 +254,7 @@ impl Field3 {
             );
             *corner = (v, w);
         }
-        Ok(lerp_inf(&corners))
+        Ok(corners)
     }
 }
 
@@ -234,6 +262,21 @@ impl Field3 {
 mod tests {
     use super::*;
     use approx::assert_relative_eq;
+
+    #[test]
+    fn finite_corner_sampling_stays_finite_in_free_cells() {
+        let f = Field3::new([3, 1, 1], vec![1.0, 2.0, f32::INFINITY]).unwrap();
+        assert!(f.sample(Point3::new(1.3, 0.0, 0.0)).unwrap().is_infinite());
+        assert_relative_eq!(f.sample_finite(Point3::new(1.3, 0.0, 0.0)).unwrap(), 2.0);
+        assert_relative_eq!(f.sample_finite(Point3::new(0.5, 0.0, 0.0)).unwrap(), 1.5);
+        assert!(f
+            .sample_finite(Point3::new(1.6, 0.0, 0.0))
+            .unwrap()
+            .is_infinite());
+        let f = Field3::new([3, 1, 1], vec![f32::INFINITY, 2.0, 3.0]).unwrap();
+        assert_relative_eq!(f.sample_finite(Point3::new(0.8, 0.0, 0.0)).unwrap(), 2.0);
+        assert!(f.sample_finite(Point3::new(f32::NAN, 0.0, 0.0)).is_err());
+    }
 
     #[test]
     fn bilinear_is_exact_on_planes_and_respects_infinity() {

@@ -92,7 +92,10 @@ impl ExactField3 {
 
 impl ContinuousField3 for ExactField3 {
     fn value(&self, p: Point3m) -> envfield_grid::Result<f32> {
-        Ok(sample_accessible(&self.metres, to_voxel(&self.frame, p)?))
+        // Over the accessible corners: plain trilinear weighting would make every point within
+        // half a voxel of the region's faces infinite, and a torso standing in an accessible
+        // voxel near a wall could neither be reached nor left.
+        self.metres.sample_finite(to_voxel(&self.frame, p)?)
     }
 
     /// Central differences of the trilinear interpolant over half a voxel.
@@ -114,44 +117,6 @@ impl ContinuousField3 for ExactField3 {
         }
         Ok(Some(g))
     }
-}
-
-/// `f` at voxel coordinates `q` (inside the lattice): infinite when the voxel holding `q` is,
-/// else the trilinear weights of the finite corners, renormalised. Plain trilinear weighting
-/// would make every point within half a voxel of the region's faces infinite, and a torso
-/// standing in an accessible voxel near a wall could neither be reached nor left.
-fn sample_accessible(f: &Field3, q: Point3) -> f32 {
-    let [nx, ny, nz] = f.shape();
-    let at = |x: usize, y: usize, z: usize| f.values()[(x * ny + y) * nz + z];
-    let round = |v: f32, n: usize| (v.round() as usize).min(n - 1);
-    if !at(round(q.x, nx), round(q.y, ny), round(q.z, nz)).is_finite() {
-        return f32::INFINITY;
-    }
-    let split = |v: f32, n: usize| {
-        let i0 = (v.floor() as usize).min(n - 1);
-        (i0, (i0 + 1).min(n - 1), v - i0 as f32)
-    };
-    let (x0, x1, fx) = split(q.x, nx);
-    let (y0, y1, fy) = split(q.y, ny);
-    let (z0, z1, fz) = split(q.z, nz);
-    let (mut acc, mut weight) = (0.0f32, 0.0f32);
-    for k in 0..8 {
-        let (bx, by, bz) = (k & 4 != 0, k & 2 != 0, k & 1 != 0);
-        let w = (if bx { fx } else { 1.0 - fx })
-            * (if by { fy } else { 1.0 - fy })
-            * (if bz { fz } else { 1.0 - fz });
-        let v = at(
-            if bx { x1 } else { x0 },
-            if by { y1 } else { y0 },
-            if bz { z1 } else { z0 },
-        );
-        if w > 0.0 && v.is_finite() {
-            acc += v * w;
-            weight += w;
-        }
-    }
-    // The holding voxel is finite and carries weight at least 1/8, so `weight > 0`.
-    acc / weight
 }
 
 /// How a learned 3D field is trained on one region.
