@@ -63,6 +63,9 @@ struct Args {
     /// Skip the learned field.
     #[arg(long)]
     no_field: bool,
+    /// The VAE's sampling temperature (the codes' standard deviation; 1 is the prior).
+    #[arg(long, default_value_t = 1.0)]
+    temperature: f32,
     /// Print the summary as one JSON line (always the last line with --rooms).
     #[arg(long)]
     json: bool,
@@ -153,7 +156,12 @@ fn one(args: &Args, vae: &Cvae) -> Result<()> {
     };
     scene.to_mesh().write(args.out.join("scene.obj"))?;
     let t = Instant::now();
-    let samples = vae.sample(&cloud(vae, &scene, args.seed)?, args.samples, args.seed)?;
+    let samples = vae.sample_tempered(
+        &cloud(vae, &scene, args.seed)?,
+        args.samples,
+        args.seed,
+        args.temperature,
+    )?;
     let sample_ms = t.elapsed().as_secs_f64() * 1e3;
     let config = region_config(args);
     let t = Instant::now();
@@ -256,11 +264,11 @@ fn many(args: &Args, vae: &Cvae, rooms: u64) -> Result<()> {
         let seed = 10_000 + k;
         let room = generate_room(&RoomConfig::default(), seed)?;
         let c = cloud(vae, &room.scene, seed)?;
-        let samples = vae.sample(&c, args.samples, seed)?;
+        let samples = vae.sample_tempered(&c, args.samples, seed, args.temperature)?;
         ours.push(region_quality(&room, &samples, &config)?);
         random.push(region_quality(
             &room,
-            &untrained.sample(&c, args.samples, seed)?,
+            &untrained.sample_tempered(&c, args.samples, seed, args.temperature)?,
             &config,
         )?);
         let box_samples = uniform_in_room(&room, 2.5, args.samples, seed);

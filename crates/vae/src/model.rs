@@ -293,12 +293,36 @@ impl Cvae {
     /// # Errors
     /// As [`Cvae::decode`]; `n` of 0 or above 10 million.
     pub fn sample(&self, points: &[[f32; 3]], n: usize, seed: u64) -> Result<Vec<[f32; 3]>> {
+        self.sample_tempered(points, n, seed, 1.0)
+    }
+
+    /// [`Cvae::sample`] with the codes drawn from a normal of standard deviation
+    /// `temperature` instead of 1: below 1 the samples keep nearer the decoder's most likely
+    /// torsos (the usual trade of diversity for sharpness); 1 is [`Cvae::sample`].
+    ///
+    /// # Errors
+    /// As [`Cvae::sample`]; a temperature that is not finite or not in (0, 10].
+    pub fn sample_tempered(
+        &self,
+        points: &[[f32; 3]],
+        n: usize,
+        seed: u64,
+        temperature: f32,
+    ) -> Result<Vec<[f32; 3]>> {
         if n == 0 || n > 10_000_000 {
             return Err(VaeError::InvalidInput(format!(
                 "samples: 1 to 10,000,000 (got {n})"
             )));
         }
-        let z = normals(n * self.config.latent, seed);
+        if !(temperature.is_finite() && temperature > 0.0 && temperature <= 10.0) {
+            return Err(VaeError::InvalidInput(format!(
+                "sampling temperature: in (0, 10] (got {temperature})"
+            )));
+        }
+        let z: Vec<f32> = normals(n * self.config.latent, seed)
+            .into_iter()
+            .map(|v| v * temperature)
+            .collect();
         let z = Tensor::from_vec(z, (n, self.config.latent), &self.device)?;
         match self.config.local {
             Some(local) => self.sample_local(&local, points, &z, seed),

@@ -99,6 +99,39 @@ fn encode_decode_and_sample_have_their_shapes_and_are_seeded() {
     );
 }
 
+/// A lower sampling temperature draws closer together; temperature 1 is `sample`; a
+/// temperature outside (0, 10] is refused.
+#[test]
+fn tempered_samples_spread_with_the_temperature() {
+    let vae = Cvae::new(small(), 0).unwrap();
+    let points = cloud(64, 5);
+    assert_eq!(
+        vae.sample_tempered(&points, 50, 9, 1.0).unwrap(),
+        vae.sample(&points, 50, 9).unwrap()
+    );
+    let spread = |t: f32| {
+        let s = vae.sample_tempered(&points, 400, 9, t).unwrap();
+        let mean: [f32; 3] = std::array::from_fn(|a| s.iter().map(|p| p[a]).sum::<f32>() / 400.0);
+        s.iter()
+            .map(|p| (0..3).map(|a| (p[a] - mean[a]).powi(2)).sum::<f32>())
+            .sum::<f32>()
+            / 400.0
+    };
+    assert!(
+        spread(0.1) < 0.5 * spread(2.0),
+        "{} {}",
+        spread(0.1),
+        spread(2.0)
+    );
+    for t in [0.0, -1.0, f32::NAN, 11.0] {
+        let e = vae
+            .sample_tempered(&points, 5, 9, t)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("temperature"), "{e}");
+    }
+}
+
 /// Bad input is refused with an error naming it: an empty cloud, NaN coordinates, a code of
 /// the wrong width, no samples, a bad config.
 #[test]
