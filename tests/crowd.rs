@@ -14,18 +14,9 @@ fn shipped() -> FieldNet {
     FieldNet::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
-/// Two rooms joined by a doorway one body wide (centre space, 0.1 m cells).
-fn two_rooms() -> Grid2 {
-    let (rows, cols) = (21, 41);
-    let obstacles = (0..rows * cols)
-        .map(|i| {
-            let (r, c) = (i / cols, i % cols);
-            let border = r < 2 || r >= rows - 2 || c < 2 || c >= cols - 2;
-            border || ((18..=22).contains(&c) && !(9..=11).contains(&r))
-        })
-        .collect();
-    Grid2::from_obstacles(rows, cols, obstacles).unwrap()
-}
+#[path = "../crates/plan/tests/doorway/mod.rs"]
+mod doorway;
+use doorway::{opposite_trips, two_rooms};
 
 fn room_map(seed: u64) -> Grid2 {
     let room = generate_room(&RoomConfig::birdseye(), seed).unwrap();
@@ -90,16 +81,7 @@ fn the_windowed_batch_of_one_step_matches_one_by_one_prediction() {
 fn two_people_cross_a_doorway_on_the_learned_field() {
     let grid = two_rooms();
     let config = CrowdConfig::default();
-    let trips = [
-        Trip {
-            start: Cell2::new(10, 5),
-            goal: Cell2::new(12, 36),
-        },
-        Trip {
-            start: Cell2::new(8, 35),
-            goal: Cell2::new(10, 4),
-        },
-    ];
+    let trips = opposite_trips();
     let run = walk_crowd(&grid, &trips, &shipped(), &config).unwrap();
     assert!(
         run.arrived_at.iter().all(Option::is_some),

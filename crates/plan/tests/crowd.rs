@@ -8,33 +8,8 @@ use envfield_plan::{
     OrcaConfig, Trip,
 };
 
-/// Two 17x17 rooms side by side (in centre space: where a body's centre may stand), joined
-/// by a doorway three cells wide and five long: one person at a time fits through it.
-fn two_rooms() -> Grid2 {
-    let (rows, cols) = (21, 41);
-    let mut obstacles = vec![false; rows * cols];
-    for r in 0..rows {
-        for c in 0..cols {
-            let border = r < 2 || r >= rows - 2 || c < 2 || c >= cols - 2;
-            let wall = (18..=22).contains(&c) && !(9..=11).contains(&r);
-            obstacles[r * cols + c] = border || wall;
-        }
-    }
-    Grid2::from_obstacles(rows, cols, obstacles).unwrap()
-}
-
-fn opposite_trips() -> Vec<Trip> {
-    vec![
-        Trip {
-            start: Cell2::new(10, 5),
-            goal: Cell2::new(12, 36),
-        },
-        Trip {
-            start: Cell2::new(8, 35),
-            goal: Cell2::new(10, 4),
-        },
-    ]
-}
+mod doorway;
+use doorway::{opposite_trips, two_rooms};
 
 fn check_doorway(run: &CrowdRun, grid: &Grid2, config: &CrowdConfig, what: &str) {
     assert!(
