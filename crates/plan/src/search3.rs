@@ -4,7 +4,8 @@
 //! all candidates in one batch, keep the ones a [`StepFilter`] allows (the pose of this step
 //! supported and collision-free, or simply inside the accessible region), and move to the
 //! smallest value; where the filter leaves no way down, go on from the best point left
-//! (greedy best-first, [`FieldSearch3::search`]).
+//! (greedy best-first, [`FieldSearch3::search`]). [`FieldSearch3::shortcut`] then straightens
+//! the path where the filter allows a straight cut.
 
 use crate::{PlanError, Result};
 use envfield_grid::{ContinuousField3, Point3m};
@@ -46,6 +47,10 @@ pub struct Path3 {
     /// [`FieldSearch3::search`] sets it.
     #[serde(default)]
     pub exhausted: bool,
+    /// Some steps passed only the looser filter of [`FieldSearch3::search_relaxed`]: the
+    /// strict filter allowed no route within the budget.
+    #[serde(default)]
+    pub relaxed: bool,
 }
 
 impl Path3 {
@@ -58,6 +63,7 @@ impl Path3 {
             reached: d <= tolerance,
             final_distance: d,
             exhausted: false,
+            relaxed: false,
         }
     }
 
@@ -98,22 +104,24 @@ pub struct FieldSearch3 {
     pub step: f32,
     /// The search stops when the torso is this close to the goal, metres.
     pub tolerance: f32,
-    /// Expansions at most (each one batched field query and one filter call).
+    /// Expansions at most (each one batched field query).
     pub max_steps: usize,
 }
 
 impl FieldSearch3 {
     /// Searches from `start` to `goal` on `field`, each step's candidates filtered by
-    /// `filter`: greedy best-first on the field's values. Each expansion takes the open point
-    /// of least value, asks the field at its 26 candidates in one batch, and opens those the
-    /// filter allows (a point within `s / 2` of one already opened is not opened again). Where
-    /// the field has no local minimum under the filter this is exactly the paper's descent,
-    /// moving to the smallest candidate at every step; where the filter blocks that descent
-    /// (the pose of the best step would collide), the search goes on from the best point left
-    /// instead of stopping. When the goal lies within `s` and the filter allows it, the path
-    /// lands on it. The path is the chain of steps from the start to the point it ends on:
-    /// the goal, or after `max_steps` expansions the opened point nearest the goal (then
-    /// `reached` is false). A step's filter call gets the step's index along that chain.
+    /// `filter`: greedy best-first on the field's values. Each expansion asks the field at
+    /// the 26 candidates of the point it expands in one batch and puts them on the open list;
+    /// the point of least value comes off the list next, and the filter is asked about it
+    /// then (lazily: a clear descent checks one pose per step, not 26). A point within `s / 2`
+    /// of one already opened is not opened again. Where the field has no local minimum under
+    /// the filter this is exactly the paper's descent, moving to the smallest allowed
+    /// candidate at every step; where the filter blocks that descent (the pose of the best
+    /// step would collide), the search goes on from the best point left instead of stopping.
+    /// When the goal lies within `s` and the filter allows it, the path lands on it. The path
+    /// is the chain of steps from the start to the point it ends on: the goal, or after
+    /// `max_steps` expansions the opened point nearest the goal (then `reached` is false). A
+    /// step's filter call gets the step's index along that chain.
     ///
     /// # Errors
     /// [`PlanError::Invalid`] for a step, tolerance or point that is not positive / finite;
@@ -150,54 +158,86 @@ impl FieldSearch3 {
         let dirs = directions26();
         let s = self.step;
         let key = |p: Point3m| p.map(|v| (v / (0.5 * s)).round() as i64);
-        // Opened points: position, parent, depth (the index along its chain).
-        let mut nodes: Vec<(Point3m, usize, usize)> = vec![(start, usize::MAX, 0)];
-        let mut opened = HashSet::from([key(start)]);
+        // Points on the open list: position, parent, depth (the index along its chain) and
+        // whether the filter has passed it (the start needs no pass).
+        let mut nodes: Vec<Node> = vec![Node {
+            at: start,
+            parent: usize::MAX,
+            depth: 0,
+            checked: true,
+        }];
+        let mut opened = HashSet::new();
         let mut open = BinaryHeap::new();
         let start_value = values_or_infinity(field, &[start])[0];
         open.push(Reverse((Order(start_value), 0usize)));
         let mut nearest = (distance(start, goal), 0usize);
         let mut end = None;
         let mut exhausted = false;
-        for _ in 0..self.max_steps {
+        let mut expansions = 0;
+        loop {
             let Some(Reverse((_, n))) = open.pop() else {
                 exhausted = true;
                 break;
             };
-            let (here, _, depth) = nodes[n];
+            let Node {
+                at: here,
+                parent,
+                depth,
+                checked,
+            } = nodes[n];
+            if opened.contains(&key(here)) {
+                continue;
+            }
+            // Lazy: a candidate's pose is checked when it comes off the list, so a clear
+            // descent checks one pose per step rather than all 26.
+            if !checked && !filter.keep(depth - 1, nodes[parent].at, &[here])?[0] {
+                continue;
+            }
+            opened.insert(key(here));
             let d = distance(here, goal);
+            if d < nearest.0 {
+                nearest = (d, n);
+            }
             if d <= self.tolerance {
                 end = Some(n);
                 break;
             }
             if d <= s && filter.keep(depth, here, &[goal])?[0] {
-                nodes.push((goal, n, depth + 1));
+                nodes.push(Node {
+                    at: goal,
+                    parent: n,
+                    depth: depth + 1,
+                    checked: true,
+                });
                 end = Some(nodes.len() - 1);
                 break;
             }
+            if expansions == self.max_steps {
+                break;
+            }
+            expansions += 1;
             let candidates: Vec<Point3m> = dirs
                 .iter()
                 .map(|v| [here[0] + s * v[0], here[1] + s * v[1], here[2] + s * v[2]])
                 .collect();
             let values = values_or_infinity(field, &candidates);
-            let keep = filter.keep(depth, here, &candidates)?;
-            for (i, c) in candidates.into_iter().enumerate() {
-                if keep[i] && values[i].is_finite() && opened.insert(key(c)) {
-                    nodes.push((c, n, depth + 1));
-                    let id = nodes.len() - 1;
-                    let dc = distance(c, goal);
-                    if dc < nearest.0 {
-                        nearest = (dc, id);
-                    }
-                    open.push(Reverse((Order(values[i]), id)));
+            for (c, v) in candidates.into_iter().zip(values) {
+                if v.is_finite() && !opened.contains(&key(c)) {
+                    nodes.push(Node {
+                        at: c,
+                        parent: n,
+                        depth: depth + 1,
+                        checked: false,
+                    });
+                    open.push(Reverse((Order(v), nodes.len() - 1)));
                 }
             }
         }
         let mut chain = Vec::new();
         let mut at = end.unwrap_or(nearest.1);
         while at != usize::MAX {
-            chain.push(nodes[at].0);
-            at = nodes[at].1;
+            chain.push(nodes[at].at);
+            at = nodes[at].parent;
         }
         chain.reverse();
         Ok(Path3 {
@@ -205,6 +245,135 @@ impl FieldSearch3 {
             ..Path3::ending(chain, goal, self.tolerance)
         })
     }
+
+    /// [`FieldSearch3::search`] under `filter`; where that does not reach the goal, again
+    /// under `fallback` (a looser filter, such as the accessible region alone), so a route is
+    /// found wherever the looser filter has one. Either path is then straightened by
+    /// [`FieldSearch3::shortcut`] under `filter`. `relaxed` says whether the fallback was
+    /// taken, `exhausted` whether the strict search opened every point it allows.
+    ///
+    /// # Errors
+    /// As [`FieldSearch3::search`].
+    pub fn search_relaxed<F, S, L>(
+        &self,
+        field: &F,
+        filter: &S,
+        fallback: &L,
+        start: Point3m,
+        goal: Point3m,
+    ) -> Result<Path3>
+    where
+        F: ContinuousField3 + ?Sized,
+        S: StepFilter + ?Sized,
+        L: StepFilter + ?Sized,
+    {
+        let strict = self.search(field, filter, start, goal)?;
+        if strict.reached {
+            return self.shortcut(filter, &strict, goal);
+        }
+        let loose = self.search(field, fallback, start, goal)?;
+        let path = Path3 {
+            relaxed: true,
+            exhausted: strict.exhausted,
+            ..loose
+        };
+        self.shortcut(filter, &path, goal)
+    }
+
+    /// Shortens `path` by straight cuts the filter allows (path optimisation after the
+    /// search): from each kept point, the farthest later point of `path` (of 16 tried, evenly
+    /// spaced) whose straight segment, walked in equal steps no longer than [`FieldSearch3::step`], passes `filter`
+    /// at every step (with the steps' indices along the new path, so a gait keeps its
+    /// rhythm), is joined to it. Where no cut from a point passes, the path's next point is
+    /// kept as it is. The ends stay. A path that is not `relaxed` (every step passed the
+    /// filter) comes back unchanged if a kept step fails under its new index, so the cut
+    /// never makes its poses worse.
+    ///
+    /// # Errors
+    /// [`PlanError::Invalid`] for a step that is not positive; errors of the filter.
+    pub fn shortcut<S>(&self, filter: &S, path: &Path3, goal: Point3m) -> Result<Path3>
+    where
+        S: StepFilter + ?Sized,
+    {
+        if !(self.step.is_finite() && self.step > 0.0) {
+            return Err(PlanError::Invalid(format!(
+                "shortcut: a positive step (got {})",
+                self.step
+            )));
+        }
+        let pts = &path.points;
+        if pts.len() < 3 {
+            return Ok(path.clone());
+        }
+        let mut out = vec![pts[0]];
+        let mut i = 0;
+        while i + 1 < pts.len() {
+            let mut joined = false;
+            // At most 16 cuts tried from each point (every stride-th later point, the
+            // farthest first), so a long path costs O(length) checks per kept point.
+            let stride = (pts.len() - 1 - i).div_ceil(16);
+            let tries = (i + 1..pts.len())
+                .rev()
+                .step_by(stride)
+                .chain((stride > 1).then_some(i + 1));
+            for j in tries {
+                if let Some(steps) = self.straight_steps(filter, &out, pts[j])? {
+                    out.extend(steps);
+                    i = j;
+                    joined = true;
+                    break;
+                }
+            }
+            if !joined {
+                if !path.relaxed {
+                    return Ok(path.clone());
+                }
+                out.push(pts[i + 1]);
+                i += 1;
+            }
+        }
+        Ok(Path3 {
+            exhausted: path.exhausted,
+            relaxed: path.relaxed,
+            ..Path3::ending(out, goal, self.tolerance)
+        })
+    }
+
+    /// The steps from the last point of `so_far` to `to` along the straight line, or `None`
+    /// when one fails `filter`.
+    fn straight_steps<S>(
+        &self,
+        filter: &S,
+        so_far: &[Point3m],
+        to: Point3m,
+    ) -> Result<Option<Vec<Point3m>>>
+    where
+        S: StepFilter + ?Sized,
+    {
+        let from = *so_far.last().expect("a start");
+        let n = (distance(from, to) / self.step).ceil().max(1.0) as usize;
+        let mut steps = Vec::with_capacity(n);
+        let mut prev = from;
+        for k in 1..=n {
+            let t = k as f32 / n as f32;
+            let p = std::array::from_fn(|a| from[a] + t * (to[a] - from[a]));
+            if !filter.keep(so_far.len() - 1 + steps.len(), prev, &[p])?[0] {
+                return Ok(None);
+            }
+            steps.push(p);
+            prev = p;
+        }
+        Ok(Some(steps))
+    }
+}
+
+/// A point on the search's open list.
+#[derive(Clone, Copy, Debug)]
+struct Node {
+    at: Point3m,
+    parent: usize,
+    depth: usize,
+    checked: bool,
 }
 
 /// An f32 ordered by `total_cmp`, for the open list.
@@ -362,6 +531,86 @@ mod tests {
         assert!(search
             .search(&Cone(goal), &AnyStep, [f32::NAN, 0.0, 0.0], goal)
             .is_err());
+    }
+
+    /// A box across the straight line: the search walks round it; the shortcut keeps every
+    /// step allowed, keeps the ends and comes close to the shortest way round (1.2 m).
+    #[test]
+    fn the_shortcut_straightens_a_detour_and_keeps_every_step_allowed() {
+        struct Outside;
+        impl StepFilter for Outside {
+            fn keep(&self, _: usize, _: Point3m, c: &[Point3m]) -> Result<Vec<bool>> {
+                Ok(c.iter()
+                    .map(|p| !((p[0] - 0.5).abs() < 0.1 && p[1].abs() < 0.3))
+                    .collect())
+            }
+        }
+        let (start, goal) = ([0.0, 0.0, 1.0], [1.0, 0.0, 1.0]);
+        let search = FieldSearch3 {
+            step: 0.05,
+            tolerance: 0.02,
+            max_steps: 10_000,
+        };
+        let raw = search.search(&Cone(goal), &Outside, start, goal).unwrap();
+        assert!(raw.reached, "{raw:?}");
+        let cut = search.shortcut(&Outside, &raw, goal).unwrap();
+        assert!(cut.reached);
+        assert_eq!(cut.points[0], start);
+        assert_eq!(*cut.points.last().unwrap(), *raw.points.last().unwrap());
+        for (k, w) in cut.points.windows(2).enumerate() {
+            assert!(
+                Outside.keep(k, w[0], &[w[1]]).unwrap()[0],
+                "step {k}: {w:?}"
+            );
+            assert!(distance(w[0], w[1]) <= 0.05 + 1e-5);
+        }
+        assert!(
+            cut.length() < raw.length() && cut.length() < 1.25,
+            "raw {} cut {}",
+            raw.length(),
+            cut.length()
+        );
+        // Nothing to cut on a straight walk.
+        let open = search.search(&Cone(goal), &AnyStep, start, goal).unwrap();
+        let same = search.shortcut(&AnyStep, &open, goal).unwrap();
+        assert!((same.length() - open.length()).abs() < 1e-4);
+    }
+
+    /// A start walled in by the strict filter: the relaxed search takes the looser one and
+    /// says so; where the strict filter has a route, it is the strict path, cut straight.
+    #[test]
+    fn the_relaxed_search_leaves_a_pocket_the_strict_filter_cannot() {
+        struct Pocket;
+        impl StepFilter for Pocket {
+            fn keep(&self, _: usize, _: Point3m, c: &[Point3m]) -> Result<Vec<bool>> {
+                // A shell at 0.3 m round the origin that the strict filter never allows.
+                Ok(c.iter()
+                    .map(|&p| (distance(p, [0.0; 3]) - 0.3).abs() > 0.1)
+                    .collect())
+            }
+        }
+        let goal = [1.0, 0.0, 0.0];
+        let search = FieldSearch3 {
+            step: 0.1,
+            tolerance: 0.02,
+            max_steps: 5_000,
+        };
+        let strict = search.search(&Cone(goal), &Pocket, [0.0; 3], goal).unwrap();
+        assert!(!strict.reached);
+        let path = search
+            .search_relaxed(&Cone(goal), &Pocket, &AnyStep, [0.0; 3], goal)
+            .unwrap();
+        assert!(path.reached && path.relaxed && path.exhausted, "{path:?}");
+        assert!(path.length() < 1.1, "{}", path.length());
+        // Outside the shell the strict filter has its way.
+        let start = [0.0, 0.8, 0.0];
+        let free = search
+            .search_relaxed(&Cone(goal), &Pocket, &AnyStep, start, goal)
+            .unwrap();
+        assert!(free.reached && !free.relaxed);
+        for (k, w) in free.points.windows(2).enumerate() {
+            assert!(Pocket.keep(k, w[0], &[w[1]]).unwrap()[0]);
+        }
     }
 
     #[test]
