@@ -117,4 +117,13 @@ fn only_the_search_with_affordance_keeps_every_pose_valid() {
     assert!(valid_share(&scene, &baseline.points, Some(step)) < 0.999);
     assert!(ours_valid > 0.999, "ours: {ours_valid}");
     assert!(rrt_valid < 0.999, "rrt: {rrt_valid}");
+    // As room_nav runs ours: the pose filter finds the route, so no fallback is taken, and
+    // the straight cuts shorten it without losing a valid pose.
+    let cut = search
+        .search_relaxed(&field, &filter, &region, start, goal)
+        .unwrap();
+    assert!(cut.reached && !cut.relaxed);
+    assert!(cut.length() <= ours.length() + 1e-4);
+    let cut_valid = share(&cut.points);
+    assert!(cut_valid > 0.999, "ours with cuts: {cut_valid}");
 }
