@@ -77,6 +77,7 @@ fn bench_rooms(c: &mut Criterion) {
         region: &region,
         sequence: &gait,
         repeat: true,
+        face_the_move: true,
         affordance: Default::default(),
     };
     let sampling = SamplingConfig {

@@ -41,8 +41,9 @@ impl StepFilter for AccessibleRegion {
 }
 
 /// With affordance: a candidate is allowed when it lies in the accessible region and the
-/// sequence's pose for that step, turned to face the move (about the vertical) and moved so
-/// its torso is on the candidate, is supported and collision-free.
+/// sequence's pose for that step, turned to face the move (about the vertical) unless it keeps
+/// its recorded heading ([`PoseFilter::face_the_move`]) and moved so its torso is on the
+/// candidate, is supported and collision-free.
 #[derive(Debug)]
 pub struct PoseFilter<'a> {
     /// The scene the poses are checked in.
@@ -55,6 +56,10 @@ pub struct PoseFilter<'a> {
     pub sequence: &'a PoseSequence,
     /// Whether the sequence repeats.
     pub repeat: bool,
+    /// Whether each pose is turned about the vertical to face its step's move (a walk), or
+    /// keeps the heading it was recorded with (a sit-down made for its seat, whose torso moves
+    /// backwards onto the seat: turned to face that move, the body would face the seat).
+    pub face_the_move: bool,
     /// The checks' tolerances.
     pub affordance: AffordanceConfig,
 }
@@ -71,13 +76,14 @@ impl PoseFilter<'_> {
     }
 
     /// Step `step`'s frame placed with its torso at `to`, facing from `from` to `to` (its
-    /// own heading when the move is vertical).
+    /// own heading when the move is vertical, or always unless
+    /// [`PoseFilter::face_the_move`]).
     pub fn placed(&self, step: usize, from: Point3m, to: Point3m) -> envfield_affordance::Pose {
         let frame = &self.sequence.frames[self.frame_of(step)];
         let torso = frame.torso();
         let facing = frame.facing();
         let (dx, dy) = (to[0] - from[0], to[1] - from[1]);
-        let turn = if dx.hypot(dy) > 1e-6 {
+        let turn = if self.face_the_move && dx.hypot(dy) > 1e-6 {
             dy.atan2(dx) - facing.y.atan2(facing.x)
         } else {
             0.0
@@ -114,7 +120,7 @@ impl PoseFilter<'_> {
                 let torso = frame.torso();
                 let facing = frame.facing();
                 let (dx, dy) = (next[0] - path[0][0], next[1] - path[0][1]);
-                let turn = if dx.hypot(dy) > 1e-6 {
+                let turn = if self.face_the_move && dx.hypot(dy) > 1e-6 {
                     dy.atan2(dx) - facing.y.atan2(facing.x)
                 } else {
                     0.0

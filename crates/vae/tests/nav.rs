@@ -72,6 +72,7 @@ fn only_the_search_with_affordance_keeps_every_pose_valid() {
         region: &region,
         sequence: &gait,
         repeat: true,
+        face_the_move: true,
         affordance: Default::default(),
     };
     let search = FieldSearch3 {
