@@ -90,6 +90,10 @@ struct Args {
     /// back to the region alone.
     #[arg(long, default_value_t = 5.0)]
     budget: f64,
+    /// The same for sit-down pairs: the steps must match the sequence's frames to the seat,
+    /// which takes more search than a walk.
+    #[arg(long, default_value_t = 50.0)]
+    sit_budget: f64,
     /// Torso samples drawn for the accessible region.
     #[arg(long, default_value_t = 6000)]
     samples: usize,
@@ -539,8 +543,10 @@ fn main() -> Result<()> {
     if args.rooms == 0 || args.rooms > 1000 || args.pairs > 10_000 || args.samples == 0 {
         bail!("--rooms 1..=1000, --pairs up to 10000 and --samples >= 1");
     }
-    if !(args.budget.is_finite() && args.budget > 0.0 && args.budget <= 10_000.0) {
-        bail!("--budget must be in (0, 10000] (got {})", args.budget);
+    for (flag, b) in [("--budget", args.budget), ("--sit-budget", args.sit_budget)] {
+        if !(b.is_finite() && b > 0.0 && b <= 10_000.0) {
+            bail!("{flag} must be in (0, 10000] (got {b})");
+        }
     }
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
@@ -624,7 +630,11 @@ fn main() -> Result<()> {
                 &net,
                 pair,
                 args.big_budget,
-                args.budget,
+                if pair.repeat {
+                    args.budget
+                } else {
+                    args.sit_budget
+                },
                 seed + i as u64,
             )?;
             if k == 0 && i == 0 {
