@@ -66,6 +66,10 @@ struct Args {
     /// The VAE's sampling temperature (the codes' standard deviation; 1 is the prior).
     #[arg(long, default_value_t = 1.0)]
     temperature: f32,
+    /// Draw a local VAE's anchors from this (whole-scene) VAE's samples, each moved by the
+    /// local VAE's training jitter, instead of uniformly over the room.
+    #[arg(long)]
+    anchors_from: Option<PathBuf>,
     /// Print the summary as one JSON line (always the last line with --rooms).
     #[arg(long)]
     json: bool,
@@ -91,6 +95,34 @@ fn cloud(vae: &Cvae, scene: &Scene, seed: u64) -> Result<Vec<[f32; 3]>> {
         .iter()
         .map(|p| [p.x, p.y, p.z])
         .collect())
+}
+
+/// `args.samples` torsos of `vae` in `scene`: drawn as `vae` draws them, or next to `anchors`'
+/// samples (moved by the local VAE's jitter) when `--anchors-from` is given.
+fn draw(
+    args: &Args,
+    vae: &Cvae,
+    anchors: Option<&Cvae>,
+    scene: &Scene,
+    seed: u64,
+) -> Result<Vec<[f32; 3]>> {
+    let c = cloud(vae, scene, seed)?;
+    let Some(first) = anchors else {
+        return Ok(vae.sample_tempered(&c, args.samples, seed, args.temperature)?);
+    };
+    let jitter = vae.config().local.map_or(0.0, |l| l.jitter);
+    let firsts = first.sample(&cloud(first, scene, seed)?, args.samples, seed ^ 0xF1F1)?;
+    let mut rng = envfield::grid::SplitMix64::new(seed ^ 0x7E77);
+    let mut normal = || {
+        // Box-Muller from two uniforms.
+        let (u, v) = (rng.next_f32().max(1e-7), rng.next_f32());
+        (-2.0f32 * u.ln()).sqrt() * (std::f32::consts::TAU * v).cos()
+    };
+    let at: Vec<[f32; 2]> = firsts
+        .iter()
+        .map(|t| [t[0] + jitter * normal(), t[1] + jitter * normal()])
+        .collect();
+    Ok(vae.sample_around(&c, &at, seed, args.temperature)?)
 }
 
 /// A top-down picture of a 3D field: each column's value at its highest accessible voxel.
@@ -156,12 +188,8 @@ fn one(args: &Args, vae: &Cvae) -> Result<()> {
     };
     scene.to_mesh().write(args.out.join("scene.obj"))?;
     let t = Instant::now();
-    let samples = vae.sample_tempered(
-        &cloud(vae, &scene, args.seed)?,
-        args.samples,
-        args.seed,
-        args.temperature,
-    )?;
+    let anchors = anchor_vae(args)?;
+    let samples = draw(args, vae, anchors.as_ref(), &scene, args.seed)?;
     let sample_ms = t.elapsed().as_secs_f64() * 1e3;
     let config = region_config(args);
     let t = Instant::now();
@@ -257,18 +285,18 @@ fn mean(q: &[RegionQuality]) -> serde_json::Value {
 fn many(args: &Args, vae: &Cvae, rooms: u64) -> Result<()> {
     let config = region_config(args);
     let untrained = Cvae::new(vae.config().clone(), 1)?;
+    let anchors = anchor_vae(args)?;
     let (mut ours, mut random, mut uniform) = (Vec::new(), Vec::new(), Vec::new());
     let mut fields = Vec::new();
     let bar = progress(rooms, "held-out rooms")?;
     for k in 0..rooms {
         let seed = 10_000 + k;
         let room = generate_room(&RoomConfig::default(), seed)?;
-        let c = cloud(vae, &room.scene, seed)?;
-        let samples = vae.sample_tempered(&c, args.samples, seed, args.temperature)?;
+        let samples = draw(args, vae, anchors.as_ref(), &room.scene, seed)?;
         ours.push(region_quality(&room, &samples, &config)?);
         random.push(region_quality(
             &room,
-            &untrained.sample_tempered(&c, args.samples, seed, args.temperature)?,
+            &draw(args, &untrained, anchors.as_ref(), &room.scene, seed)?,
             &config,
         )?);
         let box_samples = uniform_in_room(&room, 2.5, args.samples, seed);
@@ -319,6 +347,14 @@ fn many(args: &Args, vae: &Cvae, rooms: u64) -> Result<()> {
     }
     println!("{line}");
     Ok(())
+}
+
+/// The VAE of `--anchors-from`, if any.
+fn anchor_vae(args: &Args) -> Result<Option<Cvae>> {
+    args.anchors_from
+        .as_ref()
+        .map(|f| Cvae::load(f).with_context(|| format!("loading the VAE {}", f.display())))
+        .transpose()
 }
 
 fn main() -> Result<()> {

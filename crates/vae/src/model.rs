@@ -347,9 +347,63 @@ impl Cvae {
         }
     }
 
+    /// One torso drawn next to each of `anchors` (x-y, metres) by a local VAE
+    /// ([`LocalConfig`]): each anchor's neighbourhood of `points` through the PointNet, a code
+    /// of standard deviation `temperature` (seeded), the decoded relative torso moved to the
+    /// anchor. [`Cvae::sample`] draws its anchors uniformly over the room; anchors placed
+    /// where people are likely (another sampler's torsos, moved by
+    /// [`LocalConfig::jitter`] as in training) keep the decoder on the anchors it learned.
+    ///
+    /// # Errors
+    /// [`VaeError::InvalidInput`] on a VAE that is not local, for no anchors or more than 10
+    /// million, an anchor that is not finite, or a temperature not in (0, 10]; as
+    /// [`Cvae::decode`].
+    pub fn sample_around(
+        &self,
+        points: &[[f32; 3]],
+        anchors: &[[f32; 2]],
+        seed: u64,
+        temperature: f32,
+    ) -> Result<Vec<[f32; 3]>> {
+        let Some(local) = self.config.local else {
+            return Err(VaeError::InvalidInput(
+                "sample_around: this VAE reads the whole scene, not neighbourhoods; draw from \
+                 it with sample()"
+                    .into(),
+            ));
+        };
+        let n = anchors.len();
+        if n == 0 || n > 10_000_000 {
+            return Err(VaeError::InvalidInput(format!(
+                "anchors: 1 to 10,000,000 (got {n})"
+            )));
+        }
+        if let Some(i) = anchors
+            .iter()
+            .position(|a| !a.iter().all(|v| v.is_finite()))
+        {
+            return Err(VaeError::InvalidInput(format!(
+                "anchor {i} is not finite: {:?}",
+                anchors[i]
+            )));
+        }
+        if !(temperature.is_finite() && temperature > 0.0 && temperature <= 10.0) {
+            return Err(VaeError::InvalidInput(format!(
+                "sampling temperature: in (0, 10] (got {temperature})"
+            )));
+        }
+        let z: Vec<f32> = normals(n * self.config.latent, seed)
+            .into_iter()
+            .map(|v| v * temperature)
+            .collect();
+        let z = Tensor::from_vec(z, (n, self.config.latent), &self.device)?;
+        let index = XyIndex::new(points, local.radius, "scene cloud")?;
+        let mut rng = SplitMix64::new(seed ^ 0xA11C_4035);
+        self.decode_around(&local, points, &index, anchors, &z, &mut rng)
+    }
+
     /// The local sampler: anchors uniform over the cloud's x-y extent (seeded), each one's
     /// neighbourhood through the PointNet, the decoder's relative torso moved to the anchor.
-    /// In chunks, so the per-point activations stay small.
     fn sample_local(
         &self,
         local: &LocalConfig,
@@ -369,12 +423,26 @@ impl Cvae {
                 ]
             })
             .collect();
+        self.decode_around(local, points, &index, &anchors, z, &mut rng)
+    }
+
+    /// Codes `z` decoded next to `anchors`, in chunks so the per-point activations stay small.
+    fn decode_around(
+        &self,
+        local: &LocalConfig,
+        points: &[[f32; 3]],
+        index: &XyIndex,
+        anchors: &[[f32; 2]],
+        z: &Tensor,
+        rng: &mut SplitMix64,
+    ) -> Result<Vec<[f32; 3]>> {
+        let n = anchors.len();
         let mut out = Vec::with_capacity(n);
         const CHUNK: usize = 512;
         for (c, chunk) in anchors.chunks(CHUNK).enumerate() {
             let hood: Vec<[f32; 3]> = chunk
                 .iter()
-                .flat_map(|&a| index.neighbourhood(points, a, local, &mut rng))
+                .flat_map(|&a| index.neighbourhood(points, a, local, rng))
                 .collect();
             let clouds =
                 self.coords(&hood, "neighbourhoods")?

@@ -450,6 +450,20 @@ fn the_local_vae_trains_samples_over_the_room_and_refuses_whole_scene_calls() {
     }
     assert!(vae.sample(&[], 5, 0).is_err());
     assert!(vae.sample(&[[0.0, f32::NAN, 0.0]], 5, 0).is_err());
+    // Anchors of one's own: every torso lands near its anchor (the decoder's offsets are
+    // bounded by the neighbourhood), and bad anchors or a whole-scene VAE are refused.
+    let anchors = [[1.0, 1.0], [w - 1.0, d - 1.0]];
+    let near = vae.sample_around(&data[0].cloud, &anchors, 7, 1.0).unwrap();
+    for (t, a) in near.iter().zip(&anchors) {
+        let off = (t[0] - a[0]).hypot(t[1] - a[1]);
+        assert!(off < 1.5, "torso {t:?} is {off} m from its anchor {a:?}");
+    }
+    let e = |r: Result<Vec<[f32; 3]>, VaeError>| r.unwrap_err().to_string();
+    assert!(e(vae.sample_around(&data[0].cloud, &[], 7, 1.0)).contains("anchors"));
+    assert!(e(vae.sample_around(&data[0].cloud, &[[0.0, f32::NAN]], 7, 1.0)).contains("anchor 0"));
+    assert!(e(vae.sample_around(&data[0].cloud, &anchors, 7, 0.0)).contains("temperature"));
+    let global = Cvae::new(small(), 0).unwrap();
+    assert!(e(global.sample_around(&data[0].cloud, &anchors, 7, 1.0)).contains("whole scene"));
     let bad = VaeConfig {
         points: 32,
         ..VaeConfig::local()
