@@ -11,7 +11,8 @@
 //!
 //! ```text
 //! cargo run --release --example room_nav                              # the shipped room, a few pairs
-//! cargo run --release --example room_nav -- --rooms 5 --pairs 20 --json   # the tables
+//! cargo run --release --example room_nav -- --rooms 5 --pairs 20 --json \
+//!     --big-budget 20000 --fields out/fields                         # the tables
 //! cargo run --release --example room_nav -- --scene room.obj          # a scene of your own
 //! ```
 //!
