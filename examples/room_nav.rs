@@ -3,10 +3,10 @@
 //! PRM and the straight line on the same accessible region and collision test; every path is
 //! fitted with the pose sequence and its poses checked.
 //!
-//! Ours (`ours`, `ours_exact`) is the search under the pose filter, the region alone where
-//! the poses allow no route within the budget (`--budget`, expansions per step of the shortest walk)
-//! (`FieldSearch3::search_relaxed`), then straight cuts the pose filter allows
-//! (`FieldSearch3::shortcut`); `ours_raw` is the paper's search alone, and `ours_noaff` the
+//! Ours (`ours`, `ours_exact`) is the search under the pose filter, then the region alone
+//! where the poses allow no route within the budget (`--budget`, expansions per step of the
+//! shortest walk; `FieldSearch3::search_relaxed`), then straight cuts the pose filter allows
+//! (`FieldSearch3::shortcut`). `ours_raw` is the paper's search alone, and `ours_noaff` the
 //! search and cuts under the region alone.
 //!
 //! ```text
