@@ -314,6 +314,15 @@ impl Cvae {
                 "samples: 1 to 10,000,000 (got {n})"
             )));
         }
+        let z = self.codes(n, seed, temperature)?;
+        match self.config.local {
+            Some(local) => self.sample_local(&local, points, &z, seed),
+            None => self.decode(points, &z),
+        }
+    }
+
+    /// `n` codes of standard deviation `temperature` (seeded), as an (n, latent) tensor.
+    fn codes(&self, n: usize, seed: u64, temperature: f32) -> Result<Tensor> {
         if !(temperature.is_finite() && temperature > 0.0 && temperature <= 10.0) {
             return Err(VaeError::InvalidInput(format!(
                 "sampling temperature: in (0, 10] (got {temperature})"
@@ -323,11 +332,7 @@ impl Cvae {
             .into_iter()
             .map(|v| v * temperature)
             .collect();
-        let z = Tensor::from_vec(z, (n, self.config.latent), &self.device)?;
-        match self.config.local {
-            Some(local) => self.sample_local(&local, points, &z, seed),
-            None => self.decode(points, &z),
-        }
+        Ok(Tensor::from_vec(z, (n, self.config.latent), &self.device)?)
     }
 
     /// How many surface points a scene's cloud should hold for this VAE: the config's
@@ -387,16 +392,7 @@ impl Cvae {
                 anchors[i]
             )));
         }
-        if !(temperature.is_finite() && temperature > 0.0 && temperature <= 10.0) {
-            return Err(VaeError::InvalidInput(format!(
-                "sampling temperature: in (0, 10] (got {temperature})"
-            )));
-        }
-        let z: Vec<f32> = normals(n * self.config.latent, seed)
-            .into_iter()
-            .map(|v| v * temperature)
-            .collect();
-        let z = Tensor::from_vec(z, (n, self.config.latent), &self.device)?;
+        let z = self.codes(n, seed, temperature)?;
         let index = XyIndex::new(points, local.radius, "scene cloud")?;
         let mut rng = SplitMix64::new(seed ^ 0xA11C_4035);
         self.decode_around(&local, points, &index, anchors, &z, &mut rng)
