@@ -80,8 +80,10 @@ struct Args {
     /// Save a trained field here (for a single room).
     #[arg(long)]
     save_field: Option<PathBuf>,
-    /// Keep every trained room field in this folder (`room_field_<seed>.safetensors`) and load
-    /// it from there on the next run, so a second run of the tables skips the training.
+    /// Keep every trained room field in this folder
+    /// (`room_field_<seed>_<region>_<steps>.safetensors`: the room, a fingerprint of its
+    /// accessible region and the training steps) and load it from there on the next run, so a
+    /// second run of the tables skips the training.
     #[arg(long)]
     fields: Option<PathBuf>,
     /// RRT* budget of the second row (raised until its path ratio matches ours).
@@ -136,6 +138,19 @@ struct Outcome {
 
 fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// A fingerprint of the region's voxels (FNV-1a over its shape and accessible voxels), so a
+/// field kept by `--fields` is only loaded again for the very region it was trained on.
+fn region_key(region: &AccessibleRegion) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    let shape = region.frame.shape;
+    for v in shape.iter().chain(region.free_indices()) {
+        for b in (*v as u64).to_le_bytes() {
+            h = (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3);
+        }
+    }
+    h
 }
 
 /// The shipped learned field of the room, if any.
@@ -575,7 +590,13 @@ fn main() -> Result<()> {
             .fields
             .as_ref()
             .filter(|_| args.scene.is_none())
-            .map(|d| d.join(format!("room_field_{seed}.safetensors")));
+            .map(|d| {
+                d.join(format!(
+                    "room_field_{seed}_{:016x}_{}.safetensors",
+                    region_key(&region),
+                    args.field_steps
+                ))
+            });
         let file = args
             .field
             .clone()
@@ -583,6 +604,9 @@ fn main() -> Result<()> {
             .or_else(|| shipped_field(seed).filter(|_| args.scene.is_none()));
         let net = match file {
             Some(f) if k == 0 || args.field.is_none() => {
+                if cached.as_ref() == Some(&f) {
+                    eprintln!("room {seed}: field loaded from {}", f.display());
+                }
                 let net = FieldNet::load(&f)?;
                 let shape = region.frame.shape.to_vec();
                 match net.config() {
@@ -617,8 +641,11 @@ fn main() -> Result<()> {
                     net.save(p)?;
                 }
                 if let Some(p) = &cached {
-                    std::fs::create_dir_all(p.parent().expect("a folder"))?;
+                    let dir = p.parent().expect("a folder");
+                    std::fs::create_dir_all(dir)
+                        .with_context(|| format!("--fields: creating {}", dir.display()))?;
                     net.save(p)?;
+                    eprintln!("room {seed}: field kept in {}", p.display());
                 }
                 net
             }
