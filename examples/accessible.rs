@@ -112,15 +112,12 @@ fn draw(
     };
     let jitter = vae.config().local.map_or(0.0, |l| l.jitter);
     let firsts = first.sample(&cloud(first, scene, seed)?, args.samples, seed ^ 0xF1F1)?;
-    let mut rng = envfield::grid::SplitMix64::new(seed ^ 0x7E77);
-    let mut normal = || {
-        // Box-Muller from two uniforms.
-        let (u, v) = (rng.next_f32().max(1e-7), rng.next_f32());
-        (-2.0f32 * u.ln()).sqrt() * (std::f32::consts::TAU * v).cos()
-    };
+    // Moved as in training: a standard-normal step of `jitter` in x and y.
+    let g = envfield::vae::normals(2 * firsts.len(), seed ^ 0x7E77);
     let at: Vec<[f32; 2]> = firsts
         .iter()
-        .map(|t| [t[0] + jitter * normal(), t[1] + jitter * normal()])
+        .zip(g.chunks_exact(2))
+        .map(|(t, g)| [t[0] + jitter * g[0], t[1] + jitter * g[1]])
         .collect();
     Ok(vae.sample_around(&c, &at, seed, args.temperature)?)
 }

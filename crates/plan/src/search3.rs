@@ -315,7 +315,7 @@ impl FieldSearch3 {
             let tries = (i + 1..pts.len())
                 .rev()
                 .step_by(stride)
-                .chain((stride > 1).then_some(i + 1));
+                .chain(((pts.len() - 2 - i) % stride != 0).then_some(i + 1));
             for j in tries {
                 if let Some(steps) = self.straight_steps(filter, &out, pts[j])? {
                     out.extend(steps);

@@ -48,7 +48,7 @@ pub use data::{
 };
 pub use error::{Result, VaeError};
 pub use field3::{train_field3, ExactField3, Field3Config, Field3Report, LearnedField3};
-pub use model::Cvae;
+pub use model::{normals, Cvae};
 pub use nav::{offset, point, PoseFilter};
 pub use region::{
     afford, afford_all, covered_pct, region_quality, uniform_in_room, AccessibleRegion, Afford,

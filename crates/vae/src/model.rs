@@ -655,7 +655,9 @@ impl XyIndex {
     }
 }
 
-pub(crate) fn normals(n: usize, seed: u64) -> Vec<f32> {
+/// `n` draws of the standard normal, seeded (Box-Muller over SplitMix64): the codes the VAE
+/// samples with, and the training's anchor jitter.
+pub fn normals(n: usize, seed: u64) -> Vec<f32> {
     let mut rng = SplitMix64::new(seed ^ 0x5EED_0F2A);
     let unit = |rng: &mut SplitMix64| ((rng.next_u64() >> 11) as f64 + 0.5) / (1u64 << 53) as f64;
     (0..n)
