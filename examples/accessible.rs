@@ -70,6 +70,9 @@ struct Args {
     /// local VAE's training jitter, instead of uniformly over the room.
     #[arg(long)]
     anchors_from: Option<PathBuf>,
+    /// Sample a gated VAE's anchors uniformly, without its occupancy gate (the ablation).
+    #[arg(long)]
+    no_gate: bool,
     /// Print the summary as one JSON line (always the last line with --rooms).
     #[arg(long)]
     json: bool,
@@ -108,7 +111,7 @@ fn draw(
 ) -> Result<Vec<[f32; 3]>> {
     let c = cloud(vae, scene, seed)?;
     let Some(first) = anchors else {
-        return Ok(vae.sample_tempered(&c, args.samples, seed, args.temperature)?);
+        return Ok(vae.sample_gated(&c, args.samples, seed, args.temperature, !args.no_gate)?);
     };
     let jitter = vae.config().local.map_or(0.0, |l| l.jitter);
     let firsts = first.sample(&cloud(first, scene, seed)?, args.samples, seed ^ 0xF1F1)?;

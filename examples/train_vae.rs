@@ -67,6 +67,14 @@ struct Args {
     /// instead of the whole room, and sampled at anchors all over the room.
     #[arg(long)]
     local: bool,
+    /// The gated local VAE (`VaeConfig::local_gated`): anchors 0.05 m around their torso and
+    /// an occupancy gate on the sampling anchors. Implies --local.
+    #[arg(long)]
+    gated: bool,
+    /// Spacing of the floor grid of standing poses in the training data, metres (the gated
+    /// VAE's occupancy labels want it no coarser than twice the gate's radius).
+    #[arg(long, default_value_t = 0.2)]
+    floor_spacing: f32,
 }
 
 fn main() -> Result<()> {
@@ -109,9 +117,10 @@ fn main() -> Result<()> {
                 seed: args.seed,
                 checkpoint_every: args.every,
             };
-            let vae = match args.local {
-                true => VaeConfig::local(),
-                false => VaeConfig::default(),
+            let vae = match (args.gated, args.local) {
+                (true, _) => VaeConfig::local_gated(),
+                (false, true) => VaeConfig::local(),
+                (false, false) => VaeConfig::default(),
             };
             VaeTrainer::new(Cvae::new(vae, args.seed)?, config)?
         }
@@ -123,6 +132,7 @@ fn main() -> Result<()> {
             .vae()
             .cloud_points()
             .max(TorsoDataConfig::default().cloud_points),
+        floor_spacing: args.floor_spacing,
         ..TorsoDataConfig::default()
     };
     let rooms = rooms_torsos(0..args.rooms, &data_config)?;
@@ -152,13 +162,13 @@ fn main() -> Result<()> {
     let last = trainer.run(&data, Some(&ckpt), |p| {
         bar.set_position(p.step);
         bar.set_message(format!(
-            "recon {:.3} kl {:.3} (weight {:.2})",
-            p.recon, p.kl, p.kl_weight
+            "recon {:.3} kl {:.3} (weight {:.2}) gate {:.3}",
+            p.recon, p.kl, p.kl_weight, p.gate
         ));
         if bar.is_hidden() && (p.checkpointed || p.step % 100 == 0) {
             eprintln!(
-                "step {}/{} loss {:.4} recon {:.4} kl {:.4} weight {:.2} {:.0} s",
-                p.step, p.steps, p.loss, p.recon, p.kl, p.kl_weight, p.seconds
+                "step {}/{} loss {:.4} recon {:.4} kl {:.4} weight {:.2} gate {:.4} {:.0} s",
+                p.step, p.steps, p.loss, p.recon, p.kl, p.kl_weight, p.gate, p.seconds
             );
         }
         true

@@ -41,7 +41,7 @@ mod nav;
 pub mod region;
 mod train;
 
-pub use config::{LocalConfig, VaeConfig, VaeTrainConfig};
+pub use config::{GateConfig, LocalConfig, VaeConfig, VaeTrainConfig};
 pub use data::{
     lie_on, room_torsos, rooms_torsos, seat_torsos, sit_on, standing_floor, RoomTorsos,
     TorsoDataConfig, TorsoSource,

@@ -72,6 +72,8 @@ pub struct Cvae {
     encoder_out: Dense,
     decoder: Vec<Dense>,
     decoder_out: Dense,
+    /// The occupancy gate's hidden and output layers, for a gated local VAE.
+    gate: Option<(Dense, Dense)>,
     device: Device,
 }
 
@@ -81,6 +83,8 @@ pub(crate) struct Loss {
     pub(crate) total: Tensor,
     pub(crate) recon: f32,
     pub(crate) kl: f32,
+    /// The gate's mean cross-entropy (0 without a gate batch).
+    pub(crate) gate: f32,
 }
 
 impl Cvae {
@@ -137,6 +141,13 @@ impl Cvae {
         )?;
         let decoder = stack(&mut store, "decoder", feature + config.latent)?;
         let decoder_out = Dense::new(&mut store, "decoder.out", config.hidden, 3, true)?;
+        let gate = match config.local.and_then(|l| l.gate) {
+            Some(_) => Some((
+                Dense::new(&mut store, "gate.0", feature, config.hidden, false)?,
+                Dense::new(&mut store, "gate.out", config.hidden, 1, true)?,
+            )),
+            None => None,
+        };
         Ok(Self {
             config,
             store,
@@ -145,6 +156,7 @@ impl Cvae {
             encoder_out,
             decoder,
             decoder_out,
+            gate,
             device: device.clone(),
         })
     }
@@ -309,6 +321,27 @@ impl Cvae {
         seed: u64,
         temperature: f32,
     ) -> Result<Vec<[f32; 3]>> {
+        self.sample_gated(points, n, seed, temperature, true)
+    }
+
+    /// [`Cvae::sample_tempered`], with a gated local VAE's gate ([`GateConfig`]) on or off:
+    /// off, every uniform anchor is decoded, as by a local VAE without a gate (the
+    /// ablation). Other VAEs ignore `gate`.
+    ///
+    /// # Errors
+    /// As [`Cvae::sample_tempered`]; [`VaeError::InvalidInput`] when the gate passes fewer
+    /// than `n` of `50 n` anchors (a scene where nobody can be, such as one without a
+    /// floor).
+    ///
+    /// [`GateConfig`]: crate::GateConfig
+    pub fn sample_gated(
+        &self,
+        points: &[[f32; 3]],
+        n: usize,
+        seed: u64,
+        temperature: f32,
+        gate: bool,
+    ) -> Result<Vec<[f32; 3]>> {
         if n == 0 || n > 10_000_000 {
             return Err(VaeError::InvalidInput(format!(
                 "samples: 1 to 10,000,000 (got {n})"
@@ -316,9 +349,46 @@ impl Cvae {
         }
         let z = self.codes(n, seed, temperature)?;
         match self.config.local {
-            Some(local) => self.sample_local(&local, points, &z, seed),
+            Some(local) => self.sample_local(&local, points, &z, seed, gate),
             None => self.decode(points, &z),
         }
+    }
+
+    /// Whether this is a local VAE with an occupancy gate.
+    pub fn gated(&self) -> bool {
+        self.gate.is_some()
+    }
+
+    /// A gated local VAE's probability that someone can be at each of `anchors` (x-y,
+    /// metres) in the scene of `points`, read from the anchor's neighbourhood.
+    ///
+    /// # Errors
+    /// [`VaeError::InvalidInput`] on a VAE without a gate, for an empty or non-finite cloud,
+    /// no anchors or one that is not finite.
+    pub fn occupancy(&self, points: &[[f32; 3]], anchors: &[[f32; 2]]) -> Result<Vec<f32>> {
+        let (Some(local), true) = (self.config.local, self.gate.is_some()) else {
+            return Err(VaeError::InvalidInput(
+                "occupancy: this VAE has no occupancy gate".into(),
+            ));
+        };
+        check_anchors(anchors)?;
+        let index = XyIndex::new(points, local.radius, "scene cloud")?;
+        let mut rng = SplitMix64::new(0x0CC0_FA7E);
+        let mut out = Vec::with_capacity(anchors.len());
+        for chunk in anchors.chunks(CHUNK) {
+            let feature = self.hood_features(&local, points, &index, chunk, &mut rng)?;
+            out.extend(sigmoid(&self.gate_logits(&feature)?)?);
+        }
+        Ok(out)
+    }
+
+    /// The gate's logits on (n, F) features, (n,).
+    pub(crate) fn gate_logits(&self, feature: &Tensor) -> Result<Tensor> {
+        let (hidden, out) = self
+            .gate
+            .as_ref()
+            .ok_or_else(|| VaeError::InvalidInput("this VAE has no occupancy gate".into()))?;
+        Ok(out.forward(&hidden.forward(feature)?.relu()?)?.squeeze(1)?)
     }
 
     /// `n` codes of standard deviation `temperature` (seeded), as an (n, latent) tensor.
@@ -377,22 +447,8 @@ impl Cvae {
                     .into(),
             ));
         };
-        let n = anchors.len();
-        if n == 0 || n > 10_000_000 {
-            return Err(VaeError::InvalidInput(format!(
-                "anchors: 1 to 10,000,000 (got {n})"
-            )));
-        }
-        if let Some(i) = anchors
-            .iter()
-            .position(|a| !a.iter().all(|v| v.is_finite()))
-        {
-            return Err(VaeError::InvalidInput(format!(
-                "anchor {i} is not finite: {:?}",
-                anchors[i]
-            )));
-        }
-        let z = self.codes(n, seed, temperature)?;
+        check_anchors(anchors)?;
+        let z = self.codes(anchors.len(), seed, temperature)?;
         let index = XyIndex::new(points, local.radius, "scene cloud")?;
         let mut rng = SplitMix64::new(seed ^ 0xA11C_4035);
         self.decode_around(&local, points, &index, anchors, &z, &mut rng)
@@ -400,26 +456,86 @@ impl Cvae {
 
     /// The local sampler: anchors uniform over the cloud's x-y extent (seeded), each one's
     /// neighbourhood through the PointNet, the decoder's relative torso moved to the anchor.
+    /// With a gate (and `gate` on), anchors are drawn in rounds and only those the gate
+    /// passes are decoded, until `n` are.
     fn sample_local(
         &self,
         local: &LocalConfig,
         points: &[[f32; 3]],
         z: &Tensor,
         seed: u64,
+        gate: bool,
     ) -> Result<Vec<[f32; 3]>> {
         let index = XyIndex::new(points, local.radius, "scene cloud")?;
         let n = z.dim(0)?;
         let mut rng = SplitMix64::new(seed ^ 0xA11C_4035);
         let [x0, y0, x1, y1] = index.extent;
-        let anchors: Vec<[f32; 2]> = (0..n)
-            .map(|_| {
-                [
-                    x0 + (x1 - x0) * rng.next_f32(),
-                    y0 + (y1 - y0) * rng.next_f32(),
-                ]
-            })
+        let uniform = |rng: &mut SplitMix64, m: usize| -> Vec<[f32; 2]> {
+            (0..m)
+                .map(|_| {
+                    [
+                        x0 + (x1 - x0) * rng.next_f32(),
+                        y0 + (y1 - y0) * rng.next_f32(),
+                    ]
+                })
+                .collect()
+        };
+        let threshold = match (local.gate, gate && self.gate.is_some()) {
+            (Some(g), true) => g.threshold,
+            _ => {
+                let anchors = uniform(&mut rng, n);
+                return self.decode_around(local, points, &index, &anchors, z, &mut rng);
+            }
+        };
+        let mut out = Vec::with_capacity(n);
+        let mut tried = 0usize;
+        while out.len() < n {
+            if tried >= 50 * n.max(CHUNK) {
+                return Err(VaeError::InvalidInput(format!(
+                    "the occupancy gate passed {} of {tried} anchors, fewer than the {n} \
+                     samples asked for: nobody can be anywhere in this scene (no floor?)",
+                    out.len()
+                )));
+            }
+            let anchors = uniform(&mut rng, CHUNK);
+            tried += CHUNK;
+            let feature = self.hood_features(local, points, &index, &anchors, &mut rng)?;
+            let p = sigmoid(&self.gate_logits(&feature)?)?;
+            let pass: Vec<u32> = (0..CHUNK as u32)
+                .filter(|&i| p[i as usize] >= threshold)
+                .take(n - out.len())
+                .collect();
+            if pass.is_empty() {
+                continue;
+            }
+            let rows = Tensor::new(pass.as_slice(), &self.device)?;
+            let zc = z.narrow(0, out.len(), pass.len())?;
+            let rel = self.to_metres(&self.decode_with(&zc, &feature.index_select(&rows, 0)?)?)?;
+            out.extend(rel.iter().zip(&pass).map(|(t, &i)| {
+                let a = anchors[i as usize];
+                [t[0] + a[0], t[1] + a[1], t[2]]
+            }));
+        }
+        Ok(out)
+    }
+
+    /// The PointNet features, (len, F), of the neighbourhoods of `anchors` in `points`.
+    fn hood_features(
+        &self,
+        local: &LocalConfig,
+        points: &[[f32; 3]],
+        index: &XyIndex,
+        anchors: &[[f32; 2]],
+        rng: &mut SplitMix64,
+    ) -> Result<Tensor> {
+        let hood: Vec<[f32; 3]> = anchors
+            .iter()
+            .flat_map(|&a| index.neighbourhood(points, a, local, rng))
             .collect();
-        self.decode_around(local, points, &index, &anchors, z, &mut rng)
+        let clouds =
+            self.coords(&hood, "neighbourhoods")?
+                .reshape((anchors.len(), local.points, 3))?;
+        self.features(&clouds)
     }
 
     /// Codes `z` decoded next to `anchors`, in chunks so the per-point activations stay small.
@@ -434,16 +550,8 @@ impl Cvae {
     ) -> Result<Vec<[f32; 3]>> {
         let n = anchors.len();
         let mut out = Vec::with_capacity(n);
-        const CHUNK: usize = 512;
         for (c, chunk) in anchors.chunks(CHUNK).enumerate() {
-            let hood: Vec<[f32; 3]> = chunk
-                .iter()
-                .flat_map(|&a| index.neighbourhood(points, a, local, rng))
-                .collect();
-            let clouds =
-                self.coords(&hood, "neighbourhoods")?
-                    .reshape((chunk.len(), local.points, 3))?;
-            let feature = self.features(&clouds)?;
+            let feature = self.hood_features(local, points, index, chunk, rng)?;
             let zc = z.narrow(0, c * CHUNK, chunk.len())?;
             let rel = self.to_metres(&self.decode_with(&zc, &feature)?)?;
             out.extend(
@@ -468,7 +576,9 @@ impl Cvae {
     /// The training loss on a batch: `clouds` (B, N, 3) and `torsos` (B * k, 3), normalised,
     /// with standard-normal noise `eps` (B * k, latent). Reconstruction: squared error over
     /// `2 sigma^2` (sigma in normalised units), summed over xyz; KL to the standard normal,
-    /// summed over the latent; both averaged over the torsos.
+    /// summed over the latent; both averaged over the torsos. `gate`, for a gated VAE: more
+    /// neighbourhoods (M, N, 3) and their occupancy labels (M,) of 0 or 1, whose logistic
+    /// cross-entropy, averaged, joins the total at the gate's weight.
     pub(crate) fn loss(
         &self,
         clouds: &Tensor,
@@ -476,6 +586,7 @@ impl Cvae {
         eps: &Tensor,
         kl_weight: f64,
         sigma: f32,
+        gate: Option<(&Tensor, &Tensor)>,
     ) -> Result<Loss> {
         let b = clouds.dim(0)?;
         let k = torsos.dim(0)? / b;
@@ -487,11 +598,21 @@ impl Cvae {
         let recon = ((recon_xyz - torsos)?.sqr()?.sum_all()? / (2.0 * (sigma * sigma) as f64 * n))?;
         let kl = (((mean.sqr()? + log_var.exp()?)? - &log_var)? - 1.0)?;
         let kl = (kl.sum_all()? * (0.5 / n))?;
-        let total = (&recon + (&kl * kl_weight)?)?;
+        let mut total = (&recon + (&kl * kl_weight)?)?;
+        let mut gate_loss = 0.0;
+        if let (Some((hoods, labels)), Some(g)) = (gate, self.config.local.and_then(|l| l.gate)) {
+            let x = self.gate_logits(&self.features(hoods)?)?;
+            // Stable logistic cross-entropy: max(x, 0) - x y + ln(1 + exp(-|x|)).
+            let bce = ((x.relu()? - (&x * labels)?)? + ((x.abs()?.neg()?.exp()? + 1.0)?.log()?))?
+                .mean_all()?;
+            gate_loss = bce.to_scalar::<f32>()?;
+            total = (total + (bce * g.weight as f64)?)?;
+        }
         Ok(Loss {
             total,
             recon: recon.to_scalar::<f32>()?,
             kl: kl.to_scalar::<f32>()?,
+            gate: gate_loss,
         })
     }
 
@@ -561,7 +682,38 @@ impl Cvae {
     }
 }
 
-/// `n` standard-normal draws (Box-Muller) from `seed`.
+/// Neighbourhoods through the PointNet at a time: the per-point activations stay small.
+const CHUNK: usize = 512;
+
+/// An error naming the first anchor that is not finite, or for none or too many.
+fn check_anchors(anchors: &[[f32; 2]]) -> Result<()> {
+    if anchors.is_empty() || anchors.len() > 10_000_000 {
+        return Err(VaeError::InvalidInput(format!(
+            "anchors: 1 to 10,000,000 (got {})",
+            anchors.len()
+        )));
+    }
+    match anchors
+        .iter()
+        .position(|a| !a.iter().all(|v| v.is_finite()))
+    {
+        Some(i) => Err(VaeError::InvalidInput(format!(
+            "anchor {i} is not finite: {:?}",
+            anchors[i]
+        ))),
+        None => Ok(()),
+    }
+}
+
+/// The logistic function of a (n,) tensor, as a vector.
+fn sigmoid(logits: &Tensor) -> Result<Vec<f32>> {
+    Ok(logits
+        .to_vec1::<f32>()?
+        .into_iter()
+        .map(|x| 1.0 / (1.0 + (-x).exp()))
+        .collect())
+}
+
 /// A cloud's points binned in x-y squares of the neighbourhood radius, for neighbourhood
 /// queries in 3x3 bins.
 pub(crate) struct XyIndex {
@@ -612,6 +764,32 @@ impl XyIndex {
             cols,
             rows,
             bins,
+        })
+    }
+
+    /// Whether some point of `cloud` (the points this index was made of) lies within
+    /// `radius` (at most the index's radius) of `anchor` in x-y.
+    pub(crate) fn any_within(&self, cloud: &[[f32; 3]], anchor: [f32; 2], radius: f32) -> bool {
+        let (c, r) = (
+            ((anchor[0] - self.extent[0]) / self.cell).floor() as isize,
+            ((anchor[1] - self.extent[1]) / self.cell).floor() as isize,
+        );
+        let r2 = radius * radius;
+        (-1..=1).any(|dr| {
+            (-1..=1).any(|dc| {
+                let (br, bc) = (r + dr, c + dc);
+                br >= 0
+                    && bc >= 0
+                    && br < self.rows as isize
+                    && bc < self.cols as isize
+                    && self.bins[br as usize * self.cols + bc as usize]
+                        .iter()
+                        .any(|&i| {
+                            let p = cloud[i as usize];
+                            let (dx, dy) = (p[0] - anchor[0], p[1] - anchor[1]);
+                            dx * dx + dy * dy <= r2
+                        })
+            })
         })
     }
 

@@ -10,6 +10,10 @@ use serde::{Deserialize, Serialize};
 use std::path::Path;
 use std::time::Instant;
 
+/// One step's batch: clouds, torsos, noise, and a gated VAE's neighbourhoods with their
+/// occupancy labels.
+type Batch = (Tensor, Tensor, Tensor, Option<(Tensor, Tensor)>);
+
 /// The metadata key of a checkpoint's training config.
 const META_TRAIN: &str = "envfield.vae_train";
 
@@ -26,6 +30,9 @@ pub struct VaeProgress {
     pub recon: f32,
     /// Its KL part (unweighted).
     pub kl: f32,
+    /// The occupancy gate's cross-entropy (unweighted; 0 without a gate).
+    #[serde(default)]
+    pub gate: f32,
     /// The KL weight of this step.
     pub kl_weight: f64,
     /// Whether a checkpoint was written after it.
@@ -117,18 +124,22 @@ impl VaeTrainer {
         }
     }
 
-    /// One step's batch: `(clouds, torsos, eps)`, normalised. For the paper's VAE,
+    /// One step's batch: `(clouds, torsos, eps, gate)`, normalised. For the paper's VAE,
     /// `scenes_per_step` rooms' clouds of `points` points and `torsos_per_scene` torso
     /// locations each. For a local VAE, `scenes_per_step x torsos_per_scene` torso locations,
     /// each with its own neighbourhood around an anchor `jitter` away, the torso relative to
     /// it (`index` holds each room's binned cloud). Torsos are drawn by kind with
-    /// `source_weights` among the kinds a room has.
+    /// `source_weights` among the kinds a room has. For a gated VAE, `gate` holds as many
+    /// neighbourhoods again around anchors uniform over the same rooms, each labelled 1 when
+    /// one of the room's torsos lies within the gate's radius (`torso_index` holds each
+    /// room's binned torsos).
     fn batch(
         &self,
         data: &[RoomTorsos],
         index: &[XyIndex],
+        torso_index: &[XyIndex],
         step: u64,
-    ) -> Result<(Tensor, Tensor, Tensor)> {
+    ) -> Result<Batch> {
         let mut rng = SplitMix64::new(self.config.seed ^ step.wrapping_mul(0x9E37_79B9_7F4A_7C15));
         let (b, k, n) = (
             self.config.scenes_per_step,
@@ -137,9 +148,23 @@ impl VaeTrainer {
         );
         let (mut cloud, mut torsos) = (Vec::with_capacity(b * n), Vec::with_capacity(b * k));
         let local = self.vae.config().local;
+        let gate = local.and_then(|l| l.gate.map(|g| (l, g)));
+        let (mut gate_cloud, mut labels) = (Vec::new(), Vec::new());
         for _ in 0..b {
             let r = rng.below(data.len());
             let room = &data[r];
+            if let Some((l, g)) = gate {
+                let [x0, y0, x1, y1] = index[r].extent;
+                for _ in 0..k {
+                    let a = [
+                        x0 + (x1 - x0) * rng.next_f32(),
+                        y0 + (y1 - y0) * rng.next_f32(),
+                    ];
+                    gate_cloud.extend(index[r].neighbourhood(&room.cloud, a, &l, &mut rng));
+                    let occupied = torso_index[r].any_within(&room.torsos, a, g.radius);
+                    labels.push(if occupied { 1f32 } else { 0.0 });
+                }
+            }
             if local.is_none() {
                 for _ in 0..n {
                     cloud.push(room.cloud[rng.below(room.cloud.len())]);
@@ -175,7 +200,16 @@ impl VaeTrainer {
             (b * k, latent),
             self.vae.device(),
         )?;
-        Ok((cloud, torsos, eps))
+        let gate = match labels.is_empty() {
+            true => None,
+            false => Some((
+                self.vae
+                    .coords(&gate_cloud, "training neighbourhoods")?
+                    .reshape((labels.len(), n, 3))?,
+                Tensor::from_vec(labels, gate_cloud.len() / n, self.vae.device())?,
+            )),
+        };
+        Ok((cloud, torsos, eps, gate))
     }
 
     /// Trains until the config's `steps` (from the current step) on `data`, checkpointing to
@@ -211,14 +245,28 @@ impl VaeTrainer {
                 .collect::<Result<_>>()?,
             None => Vec::new(),
         };
+        // Each room's binned torsos, for a gated VAE's occupancy labels.
+        let torso_index: Vec<XyIndex> = match self.vae.config().local.and_then(|l| l.gate) {
+            Some(g) => data
+                .iter()
+                .enumerate()
+                .map(|(i, r)| {
+                    XyIndex::new(&r.torsos, g.radius, &format!("training room {i}'s torsos"))
+                })
+                .collect::<Result<_>>()?,
+            None => Vec::new(),
+        };
         let start = Instant::now();
         let mut last = None;
         while self.step() < self.config.steps {
             let step = self.step();
-            let (cloud, torsos, eps) = self.batch(data, &index, step)?;
+            let (cloud, torsos, eps, gate) = self.batch(data, &index, &torso_index, step)?;
             let kl_weight = self.config.kl_weight(step);
             let sigma = self.config.recon_sigma / self.vae.config().coord_scale;
-            let loss = self.vae.loss(&cloud, &torsos, &eps, kl_weight, sigma)?;
+            let gate = gate.as_ref().map(|(h, l)| (h, l));
+            let loss = self
+                .vae
+                .loss(&cloud, &torsos, &eps, kl_weight, sigma, gate)?;
             let value = loss.total.to_scalar::<f32>()?;
             if !value.is_finite() {
                 return Err(VaeError::Diverged { step, loss: value });
@@ -240,6 +288,7 @@ impl VaeTrainer {
                 loss: value,
                 recon: loss.recon,
                 kl: loss.kl,
+                gate: loss.gate,
                 kl_weight,
                 checkpointed,
                 seconds: start.elapsed().as_secs_f64(),
