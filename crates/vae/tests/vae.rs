@@ -492,3 +492,93 @@ fn the_shipped_local_vae_samples_an_unseen_room() {
     assert!(q.floor_coverage_pct > 90.0, "{q:?}");
     assert!(q.seat_coverage_pct > 0.0, "{q:?}");
 }
+
+/// The gated local VAE: its gate learns (its cross-entropy falls), its file keeps the gate,
+/// it samples as many torsos as asked with the gate on or off, and it refuses, naming the
+/// gate, a scene where the gate passes no anchor, as it does a bad gate configuration and
+/// occupancy queries to a VAE without a gate.
+#[test]
+fn the_gated_vae_learns_its_gate_and_refuses_a_scene_where_nobody_can_be() {
+    let gated = VaeConfig {
+        pointnet: vec![16, 32],
+        latent: 4,
+        hidden: 32,
+        ..VaeConfig::local_gated()
+    };
+    let room = generate_room(&RoomConfig::default(), 4).unwrap();
+    let data = vec![room_torsos(
+        &room,
+        &TorsoDataConfig {
+            walks: 1,
+            cloud_points: 4096,
+            floor_spacing: 0.1,
+            ..TorsoDataConfig::default()
+        },
+        4,
+    )
+    .unwrap()];
+    let config = VaeTrainConfig {
+        lr: 1e-3,
+        steps: 80,
+        scenes_per_step: 2,
+        torsos_per_scene: 16,
+        checkpoint_every: 0,
+        ..VaeTrainConfig::default()
+    };
+    let mut trainer = VaeTrainer::new(Cvae::new(gated.clone(), 2).unwrap(), config).unwrap();
+    let mut gate = Vec::new();
+    trainer
+        .run(&data, None, |p| {
+            gate.push(p.gate);
+            true
+        })
+        .unwrap();
+    assert!(
+        gate[70..].iter().sum::<f32>() < gate[..10].iter().sum::<f32>(),
+        "{gate:?}"
+    );
+    let vae = trainer.vae();
+    assert!(vae.gated());
+    let points = &data[0].cloud;
+    let anchors = [[1.0, 1.0], [2.0, 1.5], [0.5, 3.0]];
+    let p = vae.occupancy(points, &anchors).unwrap();
+    assert_eq!(p.len(), 3);
+    assert!(p.iter().all(|p| (0.0..=1.0).contains(p)), "{p:?}");
+    let path = tmp("gated.safetensors");
+    vae.save(&path).unwrap();
+    let loaded = Cvae::load(&path).unwrap();
+    assert!(loaded.gated());
+    assert_eq!(loaded.occupancy(points, &anchors).unwrap(), p);
+    for gate in [true, false] {
+        let s = vae.sample_gated(points, 300, 5, 1.0, gate).unwrap();
+        assert_eq!(s.len(), 300);
+        assert_eq!(s, vae.sample_gated(points, 300, 5, 1.0, gate).unwrap());
+    }
+    // A gate that passes nothing: the sampler stops and says why.
+    let mut shut = gated.clone();
+    if let Some(l) = shut.local.as_mut() {
+        l.gate.as_mut().unwrap().threshold = 0.999_999;
+    }
+    let e = Cvae::new(shut, 2)
+        .unwrap()
+        .sample(points, 10, 0)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("occupancy gate passed 0"), "{e}");
+    // Bad input and bad configurations.
+    let err = |r: Result<Vec<f32>, VaeError>| r.unwrap_err().to_string();
+    assert!(err(vae.occupancy(points, &[])).contains("anchors"));
+    assert!(err(vae.occupancy(points, &[[f32::NAN, 0.0]])).contains("anchor 0"));
+    assert!(err(vae.occupancy(&[], &anchors)).contains("cloud"));
+    let plain = Cvae::new(small(), 0).unwrap();
+    assert!(err(plain.occupancy(points, &anchors)).contains("no occupancy gate"));
+    for (radius, threshold) in [(0.0, 0.5), (0.08, 1.0), (f32::NAN, 0.5)] {
+        let mut bad = gated.clone();
+        if let Some(l) = bad.local.as_mut() {
+            let g = l.gate.as_mut().unwrap();
+            (g.radius, g.threshold) = (radius, threshold);
+        }
+        let e = Cvae::new(bad, 0).unwrap_err().to_string();
+        assert!(e.contains("gate"), "{e}");
+    }
+}
