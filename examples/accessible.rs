@@ -73,6 +73,9 @@ struct Args {
     /// Sample a gated VAE's anchors uniformly, without its occupancy gate (the ablation).
     #[arg(long)]
     no_gate: bool,
+    /// A gated VAE's occupancy threshold (default: the one it was trained with).
+    #[arg(long)]
+    gate_threshold: Option<f32>,
     /// Print the summary as one JSON line (always the last line with --rooms).
     #[arg(long)]
     json: bool,
@@ -111,7 +114,12 @@ fn draw(
 ) -> Result<Vec<[f32; 3]>> {
     let c = cloud(vae, scene, seed)?;
     let Some(first) = anchors else {
-        return Ok(vae.sample_gated(&c, args.samples, seed, args.temperature, !args.no_gate)?);
+        let trained = vae.config().local.and_then(|l| l.gate).map(|g| g.threshold);
+        let gate = match args.no_gate {
+            true => None,
+            false => args.gate_threshold.or(trained),
+        };
+        return Ok(vae.sample_gated(&c, args.samples, seed, args.temperature, gate)?);
     };
     let jitter = vae.config().local.map_or(0.0, |l| l.jitter);
     let firsts = first.sample(&cloud(first, scene, seed)?, args.samples, seed ^ 0xF1F1)?;

@@ -75,6 +75,10 @@ struct Args {
     /// VAE's occupancy labels want it no coarser than twice the gate's radius).
     #[arg(long, default_value_t = 0.2)]
     floor_spacing: f32,
+    /// Train only on the torso locations where the accessible region's filter finds a full
+    /// pose (`TorsoDataConfig::affordable_only`): no frames from the middle of sitting down.
+    #[arg(long)]
+    affordable_only: bool,
 }
 
 fn main() -> Result<()> {
@@ -133,6 +137,7 @@ fn main() -> Result<()> {
             .cloud_points()
             .max(TorsoDataConfig::default().cloud_points),
         floor_spacing: args.floor_spacing,
+        affordable_only: args.affordable_only,
         ..TorsoDataConfig::default()
     };
     let rooms = rooms_torsos(0..args.rooms, &data_config)?;

@@ -31,6 +31,13 @@ pub struct TorsoDataConfig {
     pub body_radius: f32,
     /// Resolution of the floor map the walks are planned on, metres.
     pub floor_resolution: f32,
+    /// Keep only the torso locations where the accessible region's filter
+    /// ([`afford`](crate::afford) with [`RegionConfig::default`](crate::RegionConfig)) finds a
+    /// full pose: the frames in the middle of sitting or lying down, valid as frames of their
+    /// sequence, afford no standing, sitting or lying pose of their own, and a VAE trained on
+    /// them draws torsos the filter then finds wanting.
+    #[serde(default)]
+    pub affordable_only: bool,
 }
 
 impl Default for TorsoDataConfig {
@@ -41,6 +48,7 @@ impl Default for TorsoDataConfig {
             cloud_points: 2048,
             body_radius: 0.25,
             floor_resolution: 0.05,
+            affordable_only: false,
         }
     }
 }
@@ -314,6 +322,17 @@ pub fn room_torsos(room: &Room, cfg: &TorsoDataConfig, seed: u64) -> Result<Room
         standing_floor(scene, bounds, cfg.floor_spacing)?,
         TorsoSource::Stand,
     );
+    if cfg.affordable_only {
+        let affords = crate::afford_all(scene, &torsos, &crate::RegionConfig::default())?;
+        let keep: Vec<bool> = affords
+            .iter()
+            .map(|a| a.kept() && a.valid.is_some())
+            .collect();
+        let mut k = keep.iter();
+        torsos.retain(|_| *k.next().unwrap_or(&false));
+        let mut k = keep.iter();
+        sources.retain(|_| *k.next().unwrap_or(&false));
+    }
     let cloud = sample_surface(scene, cfg.cloud_points, seed ^ 0xC10D)?
         .iter()
         .map(|p| [p.x, p.y, p.z])

@@ -321,17 +321,19 @@ impl Cvae {
         seed: u64,
         temperature: f32,
     ) -> Result<Vec<[f32; 3]>> {
-        self.sample_gated(points, n, seed, temperature, true)
+        let gate = self.config.local.and_then(|l| l.gate).map(|g| g.threshold);
+        self.sample_gated(points, n, seed, temperature, gate)
     }
 
-    /// [`Cvae::sample_tempered`], with a gated local VAE's gate ([`GateConfig`]) on or off:
-    /// off, every uniform anchor is decoded, as by a local VAE without a gate (the
+    /// [`Cvae::sample_tempered`] with a gated local VAE's gate ([`GateConfig`]) at a
+    /// threshold of one's own: `Some(t)` decodes the uniform anchors whose occupancy is at
+    /// least `t`, `None` every one of them, as a local VAE without a gate does (the
     /// ablation). Other VAEs ignore `gate`.
     ///
     /// # Errors
-    /// As [`Cvae::sample_tempered`]; [`VaeError::InvalidInput`] when the gate passes fewer
-    /// than `n` of `50 n` anchors (a scene where nobody can be, such as one without a
-    /// floor).
+    /// As [`Cvae::sample_tempered`]; [`VaeError::InvalidInput`] for a threshold outside
+    /// [0, 1), and when the gate passes fewer than `n` of `50 max(n, 512)` anchors (a scene
+    /// where nobody can be, such as one without a floor).
     ///
     /// [`GateConfig`]: crate::GateConfig
     pub fn sample_gated(
@@ -340,8 +342,13 @@ impl Cvae {
         n: usize,
         seed: u64,
         temperature: f32,
-        gate: bool,
+        gate: Option<f32>,
     ) -> Result<Vec<[f32; 3]>> {
+        if let Some(t) = gate.filter(|t| !(0.0..1.0).contains(t)) {
+            return Err(VaeError::InvalidInput(format!(
+                "gate threshold: in [0, 1) (got {t})"
+            )));
+        }
         if n == 0 || n > 10_000_000 {
             return Err(VaeError::InvalidInput(format!(
                 "samples: 1 to 10,000,000 (got {n})"
@@ -464,7 +471,7 @@ impl Cvae {
         points: &[[f32; 3]],
         z: &Tensor,
         seed: u64,
-        gate: bool,
+        gate: Option<f32>,
     ) -> Result<Vec<[f32; 3]>> {
         let index = XyIndex::new(points, local.radius, "scene cloud")?;
         let n = z.dim(0)?;
@@ -480,8 +487,8 @@ impl Cvae {
                 })
                 .collect()
         };
-        let threshold = match (local.gate, gate && self.gate.is_some()) {
-            (Some(g), true) => g.threshold,
+        let threshold = match (gate, self.gate.is_some()) {
+            (Some(t), true) => t,
             _ => {
                 let anchors = uniform(&mut rng, n);
                 return self.decode_around(local, points, &index, &anchors, z, &mut rng);

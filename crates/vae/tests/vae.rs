@@ -549,7 +549,7 @@ fn the_gated_vae_learns_its_gate_and_refuses_a_scene_where_nobody_can_be() {
     let loaded = Cvae::load(&path).unwrap();
     assert!(loaded.gated());
     assert_eq!(loaded.occupancy(points, &anchors).unwrap(), p);
-    for gate in [true, false] {
+    for gate in [Some(0.5), Some(0.2), None] {
         let s = vae.sample_gated(points, 300, 5, 1.0, gate).unwrap();
         assert_eq!(s.len(), 300);
         assert_eq!(s, vae.sample_gated(points, 300, 5, 1.0, gate).unwrap());
@@ -567,6 +567,11 @@ fn the_gated_vae_learns_its_gate_and_refuses_a_scene_where_nobody_can_be() {
     assert!(e.contains("occupancy gate passed 0"), "{e}");
     // Bad input and bad configurations.
     let err = |r: Result<Vec<f32>, VaeError>| r.unwrap_err().to_string();
+    assert!(vae
+        .sample_gated(points, 10, 0, 1.0, Some(1.0))
+        .unwrap_err()
+        .to_string()
+        .contains("gate threshold"));
     assert!(err(vae.occupancy(points, &[])).contains("anchors"));
     assert!(err(vae.occupancy(points, &[[f32::NAN, 0.0]])).contains("anchor 0"));
     assert!(err(vae.occupancy(&[], &anchors)).contains("cloud"));
