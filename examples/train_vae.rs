@@ -67,8 +67,9 @@ struct Args {
     /// instead of the whole room, and sampled at anchors all over the room.
     #[arg(long)]
     local: bool,
-    /// The gated local VAE (`VaeConfig::local_gated`): anchors 0.05 m around their torso and
-    /// an occupancy gate on the sampling anchors. Implies --local.
+    /// The gated local VAE (`VaeConfig::local_gated`): anchors 0.05 m around their torso, an
+    /// occupancy gate on the sampling anchors and pose kinds. Implies --local and
+    /// --affordable-only.
     #[arg(long)]
     gated: bool,
     /// Spacing of the floor grid of standing poses in the training data, metres (the gated
@@ -137,7 +138,7 @@ fn main() -> Result<()> {
             .cloud_points()
             .max(TorsoDataConfig::default().cloud_points),
         floor_spacing: args.floor_spacing,
-        affordable_only: args.affordable_only,
+        affordable_only: args.affordable_only || trainer.vae().has_kinds(),
         ..TorsoDataConfig::default()
     };
     let rooms = rooms_torsos(0..args.rooms, &data_config)?;
@@ -167,13 +168,13 @@ fn main() -> Result<()> {
     let last = trainer.run(&data, Some(&ckpt), |p| {
         bar.set_position(p.step);
         bar.set_message(format!(
-            "recon {:.3} kl {:.3} (weight {:.2}) gate {:.3}",
-            p.recon, p.kl, p.kl_weight, p.gate
+            "recon {:.3} kl {:.3} (weight {:.2}) gate {:.3} kind {:.3}",
+            p.recon, p.kl, p.kl_weight, p.gate, p.kind
         ));
         if bar.is_hidden() && (p.checkpointed || p.step % 100 == 0) {
             eprintln!(
-                "step {}/{} loss {:.4} recon {:.4} kl {:.4} weight {:.2} gate {:.4} {:.0} s",
-                p.step, p.steps, p.loss, p.recon, p.kl, p.kl_weight, p.gate, p.seconds
+                "step {}/{} loss {:.4} recon {:.4} kl {:.4} weight {:.2} gate {:.4} kind {:.4} {:.0} s",
+                p.step, p.steps, p.loss, p.recon, p.kl, p.kl_weight, p.gate, p.kind, p.seconds
             );
         }
         true

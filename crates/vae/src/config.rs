@@ -65,8 +65,18 @@ pub struct GateConfig {
     pub radius: f32,
     /// Sampling keeps the anchors whose occupancy probability is at least this.
     pub threshold: f32,
-    /// Weight of the gate's cross-entropy in the training loss.
+    /// Weight of the gate's cross-entropy in the training loss (and of the pose-kind head's,
+    /// with `kinds`).
     pub weight: f32,
+    /// Pose kinds: the decoder gives one torso per kind of pose (standing, sitting, lying),
+    /// the encoder reads the torso's kind, and a third head, on the same neighbourhood
+    /// feature, picks the kind a sample takes. A single Gaussian decoder over a standing
+    /// height of 0.93 m and a sitting one of 0.53 m fills the gap between them with torsos
+    /// that afford neither; with kinds the latent code only has to carry what varies within
+    /// a kind. Trains on torsos labelled by the pose they afford
+    /// ([`TorsoDataConfig::affordable_only`](crate::TorsoDataConfig)).
+    #[serde(default)]
+    pub kinds: bool,
 }
 
 impl VaeConfig {
@@ -90,8 +100,9 @@ impl VaeConfig {
 
     /// The gated local variant: [`VaeConfig::local`] with anchors 0.05 m around their torso,
     /// so the decoder gives a torso's height where it is asked rather than guessing where
-    /// near the anchor it might be, and an occupancy [`GateConfig`] (radius 0.08 m,
-    /// threshold 0.5, weight 1) that keeps anchors where nobody can be from being decoded.
+    /// near the anchor it might be, an occupancy [`GateConfig`] (radius 0.08 m, threshold
+    /// 0.5, weight 1) that keeps anchors where nobody can be from being decoded, and pose
+    /// kinds ([`GateConfig::kinds`]).
     pub fn local_gated() -> Self {
         let mut c = Self::local();
         if let Some(l) = c.local.as_mut() {
@@ -100,6 +111,7 @@ impl VaeConfig {
                 radius: 0.08,
                 threshold: 0.5,
                 weight: 1.0,
+                kinds: true,
             });
         }
         c

@@ -76,6 +76,11 @@ pub struct RoomTorsos {
     pub torsos: Vec<[f32; 3]>,
     /// Where each torso location came from.
     pub sources: Vec<TorsoSource>,
+    /// The pose each torso location affords by the accessible region's filter
+    /// ([`afford`](crate::afford) with the default [`RegionConfig`](crate::RegionConfig)):
+    /// the first supported and collision-free one of standing, sitting and lying, `None`
+    /// for none.
+    pub kinds: Vec<Option<Support>>,
 }
 
 /// The torso locations of a sequence's valid frames.
@@ -322,16 +327,18 @@ pub fn room_torsos(room: &Room, cfg: &TorsoDataConfig, seed: u64) -> Result<Room
         standing_floor(scene, bounds, cfg.floor_spacing)?,
         TorsoSource::Stand,
     );
-    if cfg.affordable_only {
-        let affords = crate::afford_all(scene, &torsos, &crate::RegionConfig::default())?;
-        let keep: Vec<bool> = affords
+    let mut kinds: Vec<Option<Support>> =
+        crate::afford_all(scene, &torsos, &crate::RegionConfig::default())?
             .iter()
-            .map(|a| a.kept() && a.valid.is_some())
+            .map(|a| a.valid.filter(|_| a.kept()))
             .collect();
+    if cfg.affordable_only {
+        let keep: Vec<bool> = kinds.iter().map(Option::is_some).collect();
         let mut k = keep.iter();
         torsos.retain(|_| *k.next().unwrap_or(&false));
         let mut k = keep.iter();
         sources.retain(|_| *k.next().unwrap_or(&false));
+        kinds.retain(Option::is_some);
     }
     let cloud = sample_surface(scene, cfg.cloud_points, seed ^ 0xC10D)?
         .iter()
@@ -341,6 +348,7 @@ pub fn room_torsos(room: &Room, cfg: &TorsoDataConfig, seed: u64) -> Result<Room
         cloud,
         torsos,
         sources,
+        kinds,
     })
 }
 

@@ -74,6 +74,8 @@ pub struct Cvae {
     decoder_out: Dense,
     /// The occupancy gate's hidden and output layers, for a gated local VAE.
     gate: Option<(Dense, Dense)>,
+    /// The pose-kind head's hidden and output layers, for a VAE with pose kinds.
+    kind: Option<(Dense, Dense)>,
     device: Device,
 }
 
@@ -85,6 +87,8 @@ pub(crate) struct Loss {
     pub(crate) kl: f32,
     /// The gate's mean cross-entropy (0 without a gate batch).
     pub(crate) gate: f32,
+    /// The pose-kind head's mean cross-entropy (0 without kinds).
+    pub(crate) kind: f32,
 }
 
 impl Cvae {
@@ -131,7 +135,11 @@ impl Cvae {
             }
             Ok(out)
         };
-        let encoder = stack(&mut store, "encoder", feature + 3)?;
+        let kinds = config.local.and_then(|l| l.gate).is_some_and(|g| g.kinds);
+        // With pose kinds the encoder also reads the torso's kind (one-hot) and the decoder
+        // gives one torso per kind.
+        let (kind_in, outs) = if kinds { (KINDS, KINDS) } else { (0, 1) };
+        let encoder = stack(&mut store, "encoder", feature + 3 + kind_in)?;
         let encoder_out = Dense::new(
             &mut store,
             "encoder.out",
@@ -140,13 +148,20 @@ impl Cvae {
             true,
         )?;
         let decoder = stack(&mut store, "decoder", feature + config.latent)?;
-        let decoder_out = Dense::new(&mut store, "decoder.out", config.hidden, 3, true)?;
+        let decoder_out = Dense::new(&mut store, "decoder.out", config.hidden, 3 * outs, true)?;
         let gate = match config.local.and_then(|l| l.gate) {
             Some(_) => Some((
                 Dense::new(&mut store, "gate.0", feature, config.hidden, false)?,
                 Dense::new(&mut store, "gate.out", config.hidden, 1, true)?,
             )),
             None => None,
+        };
+        let kind = match kinds {
+            true => Some((
+                Dense::new(&mut store, "kind.0", feature, config.hidden, false)?,
+                Dense::new(&mut store, "kind.out", config.hidden, KINDS, true)?,
+            )),
+            false => None,
         };
         Ok(Self {
             config,
@@ -157,6 +172,7 @@ impl Cvae {
             decoder,
             decoder_out,
             gate,
+            kind,
             device: device.clone(),
         })
     }
@@ -234,27 +250,81 @@ impl Cvae {
             .reshape((b * k, f))?)
     }
 
-    /// The encoder on (B * k, F) repeated features and (B * k, 3) normalised torsos: mean and
-    /// log variance, each (B * k, latent); the log variance is clamped to [-12, 8].
-    fn encode_with(&self, feature: &Tensor, torsos: &Tensor) -> Result<(Tensor, Tensor)> {
-        let out = mlp(
-            &self.encoder,
-            &self.encoder_out,
-            &Tensor::cat(&[feature, torsos], 1)?,
-        )?;
+    /// The encoder on (B * k, F) repeated features and (B * k, 3) normalised torsos (and,
+    /// with pose kinds, their (B * k, 3) one-hot kinds): mean and log variance, each
+    /// (B * k, latent); the log variance is clamped to [-12, 8].
+    fn encode_with(
+        &self,
+        feature: &Tensor,
+        torsos: &Tensor,
+        kinds: Option<&Tensor>,
+    ) -> Result<(Tensor, Tensor)> {
+        let input = match kinds {
+            Some(k) => Tensor::cat(&[feature, torsos, k], 1)?,
+            None => Tensor::cat(&[feature, torsos], 1)?,
+        };
+        let out = mlp(&self.encoder, &self.encoder_out, &input)?;
         let l = self.config.latent;
         let mean = out.narrow(1, 0, l)?;
         let log_var = out.narrow(1, l, l)?.clamp(-12f32, 8f32)?;
         Ok((mean, log_var))
     }
 
-    /// The decoder on (n, latent) codes and (n, F) features: (n, 3) normalised torsos.
-    fn decode_with(&self, z: &Tensor, feature: &Tensor) -> Result<Tensor> {
-        mlp(
+    /// The decoder on (n, latent) codes and (n, F) features: (n, 3) normalised torsos, or
+    /// with pose kinds the torso of each row's kind in the (n, 3) one-hot `kinds`.
+    fn decode_with(&self, z: &Tensor, feature: &Tensor, kinds: Option<&Tensor>) -> Result<Tensor> {
+        let out = mlp(
             &self.decoder,
             &self.decoder_out,
             &Tensor::cat(&[z, feature], 1)?,
-        )
+        )?;
+        match kinds {
+            None => Ok(out),
+            Some(k) => {
+                let n = out.dim(0)?;
+                Ok(out
+                    .reshape((n, KINDS, 3))?
+                    .broadcast_mul(&k.unsqueeze(2)?)?
+                    .sum(1)?)
+            }
+        }
+    }
+
+    /// The decoder next to neighbourhoods of (n, F) features: with pose kinds, each row's kind
+    /// drawn (seeded by `rng`) from the kind head's probabilities.
+    fn decode_local(&self, z: &Tensor, feature: &Tensor, rng: &mut SplitMix64) -> Result<Tensor> {
+        let Some(logits) = self.kind_logits(feature)? else {
+            return self.decode_with(z, feature, None);
+        };
+        let n = logits.dim(0)?;
+        let mut onehot = vec![0f32; n * KINDS];
+        for (i, row) in logits.to_vec2::<f32>()?.iter().enumerate() {
+            let top = row.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+            let w: Vec<f32> = row.iter().map(|x| (x - top).exp()).collect();
+            let mut u = rng.next_f32() * w.iter().sum::<f32>();
+            let k = (0..KINDS)
+                .find(|&k| {
+                    u -= w[k];
+                    u < 0.0
+                })
+                .unwrap_or(KINDS - 1);
+            onehot[i * KINDS + k] = 1.0;
+        }
+        let kinds = Tensor::from_vec(onehot, (n, KINDS), &self.device)?;
+        self.decode_with(z, feature, Some(&kinds))
+    }
+
+    /// The pose-kind head's logits on (n, F) features, (n, 3), for a VAE with pose kinds.
+    fn kind_logits(&self, feature: &Tensor) -> Result<Option<Tensor>> {
+        match &self.kind {
+            None => Ok(None),
+            Some((hidden, out)) => Ok(Some(out.forward(&hidden.forward(feature)?.relu()?)?)),
+        }
+    }
+
+    /// Whether this VAE has pose kinds ([`GateConfig::kinds`](crate::GateConfig)).
+    pub fn has_kinds(&self) -> bool {
+        self.kind.is_some()
     }
 
     /// The encoder: for each of `torsos` in the scene of `points`, the mean and log variance
@@ -267,7 +337,7 @@ impl Cvae {
         self.global_only("encode")?;
         let feature = self.scene_feature(points)?;
         let t = self.coords(torsos, "torso locations")?;
-        let (mean, log_var) = self.encode_with(&Self::repeat(&feature, torsos.len())?, &t)?;
+        let (mean, log_var) = self.encode_with(&Self::repeat(&feature, torsos.len())?, &t, None)?;
         Ok((mean.detach(), log_var.detach()))
     }
 
@@ -294,7 +364,7 @@ impl Cvae {
                 z.dims()
             )));
         }
-        let out = self.decode_with(z, &Self::repeat(&feature, n)?)?;
+        let out = self.decode_with(z, &Self::repeat(&feature, n)?, None)?;
         self.to_metres(&out)
     }
 
@@ -517,7 +587,8 @@ impl Cvae {
             }
             let rows = Tensor::new(pass.as_slice(), &self.device)?;
             let zc = z.narrow(0, out.len(), pass.len())?;
-            let rel = self.to_metres(&self.decode_with(&zc, &feature.index_select(&rows, 0)?)?)?;
+            let passed = feature.index_select(&rows, 0)?;
+            let rel = self.to_metres(&self.decode_local(&zc, &passed, &mut rng)?)?;
             out.extend(rel.iter().zip(&pass).map(|(t, &i)| {
                 let a = anchors[i as usize];
                 [t[0] + a[0], t[1] + a[1], t[2]]
@@ -560,7 +631,7 @@ impl Cvae {
         for (c, chunk) in anchors.chunks(CHUNK).enumerate() {
             let feature = self.hood_features(local, points, index, chunk, rng)?;
             let zc = z.narrow(0, c * CHUNK, chunk.len())?;
-            let rel = self.to_metres(&self.decode_with(&zc, &feature)?)?;
+            let rel = self.to_metres(&self.decode_local(&zc, &feature, rng)?)?;
             out.extend(
                 rel.iter()
                     .zip(chunk)
@@ -585,7 +656,10 @@ impl Cvae {
     /// `2 sigma^2` (sigma in normalised units), summed over xyz; KL to the standard normal,
     /// summed over the latent; both averaged over the torsos. `gate`, for a gated VAE: more
     /// neighbourhoods (M, N, 3) and their occupancy labels (M,) of 0 or 1, whose logistic
-    /// cross-entropy, averaged, joins the total at the gate's weight.
+    /// cross-entropy, averaged, joins the total at the gate's weight. `kinds`, for a VAE with
+    /// pose kinds: the torsos' (B * k, 3) one-hot kinds; the kind head's cross-entropy joins
+    /// the total at the gate's weight.
+    #[allow(clippy::too_many_arguments)]
     pub(crate) fn loss(
         &self,
         clouds: &Tensor,
@@ -594,13 +668,23 @@ impl Cvae {
         kl_weight: f64,
         sigma: f32,
         gate: Option<(&Tensor, &Tensor)>,
+        kinds: Option<&Tensor>,
     ) -> Result<Loss> {
         let b = clouds.dim(0)?;
         let k = torsos.dim(0)? / b;
         let feature = Self::repeat(&self.features(clouds)?, k)?;
-        let (mean, log_var) = self.encode_with(&feature, torsos)?;
+        let kinds = match (self.has_kinds(), kinds) {
+            (false, _) => None,
+            (true, Some(k)) => Some(k),
+            (true, None) => {
+                return Err(VaeError::InvalidInput(
+                    "a VAE with pose kinds needs each training torso's kind".into(),
+                ))
+            }
+        };
+        let (mean, log_var) = self.encode_with(&feature, torsos, kinds)?;
         let z = (&mean + ((&log_var * 0.5)?.exp()? * eps)?)?;
-        let recon_xyz = self.decode_with(&z, &feature)?;
+        let recon_xyz = self.decode_with(&z, &feature, kinds)?;
         let n = (b * k) as f64;
         let recon = ((recon_xyz - torsos)?.sqr()?.sum_all()? / (2.0 * (sigma * sigma) as f64 * n))?;
         let kl = (((mean.sqr()? + log_var.exp()?)? - &log_var)? - 1.0)?;
@@ -615,11 +699,27 @@ impl Cvae {
             gate_loss = bce.to_scalar::<f32>()?;
             total = (total + (bce * g.weight as f64)?)?;
         }
+        let mut kind_loss = 0.0;
+        if let (Some(onehot), Some(logits), Some(g)) = (
+            kinds,
+            self.kind_logits(&feature)?,
+            self.config.local.and_then(|l| l.gate),
+        ) {
+            // Cross-entropy through a stable log-softmax.
+            let top = logits.max_keepdim(1)?;
+            let shifted = logits.broadcast_sub(&top)?;
+            let lse = shifted.exp()?.sum_keepdim(1)?.log()?;
+            let log_p = shifted.broadcast_sub(&lse)?;
+            let ce = (log_p * onehot)?.sum(1)?.neg()?.mean_all()?;
+            kind_loss = ce.to_scalar::<f32>()?;
+            total = (total + (ce * g.weight as f64)?)?;
+        }
         Ok(Loss {
             total,
             recon: recon.to_scalar::<f32>()?,
             kl: kl.to_scalar::<f32>()?,
             gate: gate_loss,
+            kind: kind_loss,
         })
     }
 
@@ -691,6 +791,9 @@ impl Cvae {
 
 /// Neighbourhoods through the PointNet at a time: the per-point activations stay small.
 const CHUNK: usize = 512;
+
+/// Pose kinds of a VAE with kinds: standing, sitting, lying, in this order.
+pub(crate) const KINDS: usize = 3;
 
 /// An error naming the first anchor that is not finite, or for none or too many.
 fn check_anchors(anchors: &[[f32; 2]]) -> Result<()> {

@@ -1,7 +1,7 @@
 //! [`VaeTrainer`]: Adam on reconstruction plus cyclically annealed KL, seeded batches from
 //! [`RoomTorsos`], atomic checkpoints that resume exactly.
 
-use crate::model::{normals, XyIndex, FORMAT};
+use crate::model::{normals, XyIndex, FORMAT, KINDS};
 use crate::{Cvae, Result, RoomTorsos, TorsoSource, VaeError, VaeTrainConfig};
 use candle_core::Tensor;
 use envfield_grid::SplitMix64;
@@ -10,9 +10,15 @@ use serde::{Deserialize, Serialize};
 use std::path::Path;
 use std::time::Instant;
 
-/// One step's batch: clouds, torsos, noise, and a gated VAE's neighbourhoods with their
-/// occupancy labels.
-type Batch = (Tensor, Tensor, Tensor, Option<(Tensor, Tensor)>);
+/// One step's batch: clouds, torsos, noise, a gated VAE's neighbourhoods with their
+/// occupancy labels, and the torsos' one-hot pose kinds for a VAE with kinds.
+type Batch = (
+    Tensor,
+    Tensor,
+    Tensor,
+    Option<(Tensor, Tensor)>,
+    Option<Tensor>,
+);
 
 /// The metadata key of a checkpoint's training config.
 const META_TRAIN: &str = "envfield.vae_train";
@@ -33,6 +39,9 @@ pub struct VaeProgress {
     /// The occupancy gate's cross-entropy (unweighted; 0 without a gate).
     #[serde(default)]
     pub gate: f32,
+    /// The pose-kind head's cross-entropy (unweighted; 0 without kinds).
+    #[serde(default)]
+    pub kind: f32,
     /// The KL weight of this step.
     pub kl_weight: f64,
     /// Whether a checkpoint was written after it.
@@ -124,7 +133,7 @@ impl VaeTrainer {
         }
     }
 
-    /// One step's batch: `(clouds, torsos, eps, gate)`, normalised. For the paper's VAE,
+    /// One step's batch: `(clouds, torsos, eps, gate, kinds)`, normalised. For the paper's VAE,
     /// `scenes_per_step` rooms' clouds of `points` points and `torsos_per_scene` torso
     /// locations each. For a local VAE, `scenes_per_step x torsos_per_scene` torso locations,
     /// each with its own neighbourhood around an anchor `jitter` away, the torso relative to
@@ -132,7 +141,7 @@ impl VaeTrainer {
     /// `source_weights` among the kinds a room has. For a gated VAE, `gate` holds as many
     /// neighbourhoods again around anchors uniform over the same rooms, each labelled 1 when
     /// one of the room's torsos lies within the gate's radius (`torso_index` holds each
-    /// room's binned torsos).
+    /// room's binned torsos). With pose kinds, `kinds` holds each torso's one-hot kind.
     fn batch(
         &self,
         data: &[RoomTorsos],
@@ -150,6 +159,8 @@ impl VaeTrainer {
         let local = self.vae.config().local;
         let gate = local.and_then(|l| l.gate.map(|g| (l, g)));
         let (mut gate_cloud, mut labels) = (Vec::new(), Vec::new());
+        let with_kinds = self.vae.has_kinds();
+        let mut kinds = Vec::new();
         for _ in 0..b {
             let r = rng.below(data.len());
             let room = &data[r];
@@ -172,7 +183,13 @@ impl VaeTrainer {
             }
             let pick = self.kind_picker(room);
             for _ in 0..k {
-                let t = room.torsos[pick(&mut rng)];
+                let i = pick(&mut rng);
+                let t = room.torsos[i];
+                if with_kinds {
+                    let mut onehot = [0f32; KINDS];
+                    onehot[kind_index(room.kinds[i])?] = 1.0;
+                    kinds.extend(onehot);
+                }
                 match &local {
                     None => torsos.push(t),
                     Some(l) => {
@@ -209,7 +226,11 @@ impl VaeTrainer {
                 Tensor::from_vec(labels, gate_cloud.len() / n, self.vae.device())?,
             )),
         };
-        Ok((cloud, torsos, eps, gate))
+        let kinds = match with_kinds {
+            true => Some(Tensor::from_vec(kinds, (b * k, KINDS), self.vae.device())?),
+            false => None,
+        };
+        Ok((cloud, torsos, eps, gate, kinds))
     }
 
     /// Trains until the config's `steps` (from the current step) on `data`, checkpointing to
@@ -229,12 +250,26 @@ impl VaeTrainer {
             return Err(VaeError::InvalidInput("no training rooms".into()));
         }
         if let Some(i) = data.iter().position(|r| {
-            r.cloud.is_empty() || r.torsos.is_empty() || r.sources.len() != r.torsos.len()
+            r.cloud.is_empty()
+                || r.torsos.is_empty()
+                || r.sources.len() != r.torsos.len()
+                || r.kinds.len() != r.torsos.len()
         }) {
             return Err(VaeError::InvalidInput(format!(
                 "training room {i} has no surface points, no torso locations, or not one \
-                 source per torso location"
+                 source and one kind per torso location"
             )));
+        }
+        if self.vae.has_kinds() {
+            if let Some(i) = data
+                .iter()
+                .position(|r| r.kinds.iter().any(Option::is_none))
+            {
+                return Err(VaeError::InvalidInput(format!(
+                    "training room {i} has torso locations that afford no pose: a VAE with pose \
+                     kinds trains on affordable ones only (TorsoDataConfig::affordable_only)"
+                )));
+            }
         }
         // Each room's binned cloud, for a local VAE's neighbourhoods.
         let index: Vec<XyIndex> = match self.vae.config().local {
@@ -260,13 +295,19 @@ impl VaeTrainer {
         let mut last = None;
         while self.step() < self.config.steps {
             let step = self.step();
-            let (cloud, torsos, eps, gate) = self.batch(data, &index, &torso_index, step)?;
+            let (cloud, torsos, eps, gate, kinds) = self.batch(data, &index, &torso_index, step)?;
             let kl_weight = self.config.kl_weight(step);
             let sigma = self.config.recon_sigma / self.vae.config().coord_scale;
             let gate = gate.as_ref().map(|(h, l)| (h, l));
-            let loss = self
-                .vae
-                .loss(&cloud, &torsos, &eps, kl_weight, sigma, gate)?;
+            let loss = self.vae.loss(
+                &cloud,
+                &torsos,
+                &eps,
+                kl_weight,
+                sigma,
+                gate,
+                kinds.as_ref(),
+            )?;
             let value = loss.total.to_scalar::<f32>()?;
             if !value.is_finite() {
                 return Err(VaeError::Diverged { step, loss: value });
@@ -289,6 +330,7 @@ impl VaeTrainer {
                 recon: loss.recon,
                 kl: loss.kl,
                 gate: loss.gate,
+                kind: loss.kind,
                 kl_weight,
                 checkpointed,
                 seconds: start.elapsed().as_secs_f64(),
@@ -353,5 +395,18 @@ impl VaeTrainer {
         let mut trainer = Self::new(vae, config)?;
         trainer.optimiser.set_moments(m, v, step);
         Ok(trainer)
+    }
+}
+
+/// A pose kind's index among the [`KINDS`] outputs: standing, sitting, lying.
+fn kind_index(kind: Option<envfield_affordance::Support>) -> Result<usize> {
+    use envfield_affordance::Support;
+    match kind {
+        Some(Support::Standing) => Ok(0),
+        Some(Support::Sitting) => Ok(1),
+        Some(Support::Lying) => Ok(2),
+        None => Err(VaeError::InvalidInput(
+            "a torso location that affords no pose has no kind".into(),
+        )),
     }
 }

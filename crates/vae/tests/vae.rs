@@ -493,7 +493,8 @@ fn the_shipped_local_vae_samples_an_unseen_room() {
     assert!(q.seat_coverage_pct > 0.0, "{q:?}");
 }
 
-/// The gated local VAE: its gate learns (its cross-entropy falls), its file keeps the gate,
+/// The gated local VAE: its gate and pose-kind heads learn (their cross-entropies fall), its
+/// file keeps them,
 /// it samples as many torsos as asked with the gate on or off, and it refuses, naming the
 /// gate, a scene where the gate passes no anchor, as it does a bad gate configuration and
 /// occupancy queries to a VAE without a gate.
@@ -512,11 +513,13 @@ fn the_gated_vae_learns_its_gate_and_refuses_a_scene_where_nobody_can_be() {
             walks: 1,
             cloud_points: 4096,
             floor_spacing: 0.1,
+            affordable_only: true,
             ..TorsoDataConfig::default()
         },
         4,
     )
     .unwrap()];
+    assert!(data[0].kinds.iter().all(Option::is_some));
     let config = VaeTrainConfig {
         lr: 1e-3,
         steps: 80,
@@ -525,20 +528,33 @@ fn the_gated_vae_learns_its_gate_and_refuses_a_scene_where_nobody_can_be() {
         checkpoint_every: 0,
         ..VaeTrainConfig::default()
     };
-    let mut trainer = VaeTrainer::new(Cvae::new(gated.clone(), 2).unwrap(), config).unwrap();
-    let mut gate = Vec::new();
+    let mut trainer =
+        VaeTrainer::new(Cvae::new(gated.clone(), 2).unwrap(), config.clone()).unwrap();
+    let (mut gate, mut kind) = (Vec::new(), Vec::new());
     trainer
         .run(&data, None, |p| {
             gate.push(p.gate);
+            kind.push(p.kind);
             true
         })
         .unwrap();
-    assert!(
-        gate[70..].iter().sum::<f32>() < gate[..10].iter().sum::<f32>(),
-        "{gate:?}"
-    );
+    for losses in [&gate, &kind] {
+        assert!(
+            losses[70..].iter().sum::<f32>() < losses[..10].iter().sum::<f32>(),
+            "{losses:?}"
+        );
+    }
     let vae = trainer.vae();
-    assert!(vae.gated());
+    assert!(vae.gated() && vae.has_kinds());
+    // Pose kinds train only on torsos labelled by the pose they afford.
+    let mut unlabelled = data.clone();
+    unlabelled[0].kinds[0] = None;
+    let mut fresh = VaeTrainer::new(Cvae::new(gated.clone(), 2).unwrap(), config.clone()).unwrap();
+    let e = fresh
+        .run(&unlabelled, None, |_| true)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("affordable_only"), "{e}");
     let points = &data[0].cloud;
     let anchors = [[1.0, 1.0], [2.0, 1.5], [0.5, 3.0]];
     let p = vae.occupancy(points, &anchors).unwrap();
