@@ -104,18 +104,20 @@ fn cloud(vae: &Cvae, scene: &Scene, seed: u64) -> Result<Vec<[f32; 3]>> {
 }
 
 /// `args.samples` torsos of `vae` in `scene`: drawn as `vae` draws them, or next to `anchors`'
-/// samples (moved by the local VAE's jitter) when `--anchors-from` is given.
+/// samples (moved by the local VAE's jitter) when `--anchors-from` is given. A gated VAE's
+/// gate is off with `--no-gate` or `gate_off`.
 fn draw(
     args: &Args,
     vae: &Cvae,
     anchors: Option<&Cvae>,
     scene: &Scene,
     seed: u64,
+    gate_off: bool,
 ) -> Result<Vec<[f32; 3]>> {
     let c = cloud(vae, scene, seed)?;
     let Some(first) = anchors else {
         let trained = vae.config().local.and_then(|l| l.gate).map(|g| g.threshold);
-        let gate = match args.no_gate {
+        let gate = match args.no_gate || gate_off {
             true => None,
             false => args.gate_threshold.or(trained),
         };
@@ -197,7 +199,7 @@ fn one(args: &Args, vae: &Cvae) -> Result<()> {
     scene.to_mesh().write(args.out.join("scene.obj"))?;
     let t = Instant::now();
     let anchors = anchor_vae(args)?;
-    let samples = draw(args, vae, anchors.as_ref(), &scene, args.seed)?;
+    let samples = draw(args, vae, anchors.as_ref(), &scene, args.seed, false)?;
     let sample_ms = t.elapsed().as_secs_f64() * 1e3;
     let config = region_config(args);
     let t = Instant::now();
@@ -300,11 +302,12 @@ fn many(args: &Args, vae: &Cvae, rooms: u64) -> Result<()> {
     for k in 0..rooms {
         let seed = 10_000 + k;
         let room = generate_room(&RoomConfig::default(), seed)?;
-        let samples = draw(args, vae, anchors.as_ref(), &room.scene, seed)?;
+        let samples = draw(args, vae, anchors.as_ref(), &room.scene, seed, false)?;
         ours.push(region_quality(&room, &samples, &config)?);
         random.push(region_quality(
             &room,
-            &draw(args, &untrained, anchors.as_ref(), &room.scene, seed)?,
+            // An untrained gate may pass no anchor at all: the twin decodes every one.
+            &draw(args, &untrained, anchors.as_ref(), &room.scene, seed, true)?,
             &config,
         )?);
         let box_samples = uniform_in_room(&room, 2.5, args.samples, seed);

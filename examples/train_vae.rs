@@ -80,6 +80,10 @@ struct Args {
     /// pose (`TorsoDataConfig::affordable_only`): no frames from the middle of sitting down.
     #[arg(long)]
     affordable_only: bool,
+    /// Add every place on a grid over the chairs, sofas and beds where the region's filter
+    /// finds a sitting or lying pose (`TorsoDataConfig::seat_grid`).
+    #[arg(long)]
+    seat_grid: bool,
 }
 
 fn main() -> Result<()> {
@@ -139,6 +143,7 @@ fn main() -> Result<()> {
             .max(TorsoDataConfig::default().cloud_points),
         floor_spacing: args.floor_spacing,
         affordable_only: args.affordable_only || trainer.vae().has_kinds(),
+        seat_grid: args.seat_grid,
         ..TorsoDataConfig::default()
     };
     let rooms = rooms_torsos(0..args.rooms, &data_config)?;

@@ -38,6 +38,12 @@ pub struct TorsoDataConfig {
     /// them draws torsos the filter then finds wanting.
     #[serde(default)]
     pub affordable_only: bool,
+    /// Extend the augmentation to seats: every place on a grid of `floor_spacing` over each
+    /// chair, sofa and bed, at heights 0 to 0.25 m above its seat in steps of 2.5 cm, where
+    /// the region's filter finds a sitting or lying pose. The sitting-down sequences give a
+    /// seat one torso location; the grid gives it the whole set a person can sit or lie at.
+    #[serde(default)]
+    pub seat_grid: bool,
 }
 
 impl Default for TorsoDataConfig {
@@ -49,6 +55,7 @@ impl Default for TorsoDataConfig {
             body_radius: 0.25,
             floor_resolution: 0.05,
             affordable_only: false,
+            seat_grid: false,
         }
     }
 }
@@ -327,6 +334,15 @@ pub fn room_torsos(room: &Room, cfg: &TorsoDataConfig, seed: u64) -> Result<Room
         standing_floor(scene, bounds, cfg.floor_spacing)?,
         TorsoSource::Stand,
     );
+    if cfg.seat_grid {
+        for (t, kind) in seat_grid(room, cfg.floor_spacing)? {
+            let source = match kind {
+                Support::Lying => TorsoSource::Lie,
+                _ => TorsoSource::Sit,
+            };
+            push(vec![t], source);
+        }
+    }
     let mut kinds: Vec<Option<Support>> =
         crate::afford_all(scene, &torsos, &crate::RegionConfig::default())?
             .iter()
@@ -350,6 +366,53 @@ pub fn room_torsos(room: &Room, cfg: &TorsoDataConfig, seed: u64) -> Result<Room
         sources,
         kinds,
     })
+}
+
+/// The torso locations on a grid of `spacing` over each chair, sofa and bed (its rotated
+/// footprint's bounding box), at heights 0 to 0.25 m above its seat in steps of 2.5 cm,
+/// where the region's filter ([`afford`](crate::afford), default
+/// [`RegionConfig`](crate::RegionConfig)) finds a sitting or lying pose, with that kind.
+///
+/// # Errors
+/// [`VaeError::InvalidConfig`] for a spacing under 1 cm; errors of the filter.
+pub fn seat_grid(room: &Room, spacing: f32) -> Result<Vec<([f32; 3], Support)>> {
+    if !(spacing.is_finite() && spacing > 0.01) {
+        return Err(VaeError::InvalidConfig(format!(
+            "seat grid: spacing above 0.01 m (got {spacing})"
+        )));
+    }
+    let mut tries = Vec::new();
+    for f in &room.furniture {
+        let Some(h) = f.seat_height else { continue };
+        if !matches!(
+            f.kind,
+            ObjectKind::Chair | ObjectKind::Sofa | ObjectKind::Bed
+        ) {
+            continue;
+        }
+        let (sin, cos) = f.yaw.sin_cos();
+        let half = [
+            0.5 * (f.size[0] * cos.abs() + f.size[1] * sin.abs()),
+            0.5 * (f.size[0] * sin.abs() + f.size[1] * cos.abs()),
+        ];
+        let steps = |h: f32| (2.0 * h / spacing).ceil() as usize;
+        for i in 0..=steps(half[0]) {
+            for j in 0..=steps(half[1]) {
+                let x = f.center[0] - half[0] + i as f32 * spacing;
+                let y = f.center[1] - half[1] + j as f32 * spacing;
+                tries.extend((0..=10).map(|k| [x, y, h + 0.025 * k as f32]));
+            }
+        }
+    }
+    let affords = crate::afford_all(&room.scene, &tries, &crate::RegionConfig::default())?;
+    Ok(tries
+        .into_iter()
+        .zip(affords)
+        .filter_map(|(t, a)| match a.valid.filter(|_| a.kept()) {
+            Some(k @ (Support::Sitting | Support::Lying)) => Some((t, k)),
+            _ => None,
+        })
+        .collect())
 }
 
 /// The rooms of seeds `seeds` (generated with the default [`RoomConfig`]) and their torso

@@ -43,7 +43,7 @@ mod train;
 
 pub use config::{GateConfig, LocalConfig, VaeConfig, VaeTrainConfig};
 pub use data::{
-    lie_on, room_torsos, rooms_torsos, seat_torsos, sit_on, standing_floor, RoomTorsos,
+    lie_on, room_torsos, rooms_torsos, seat_grid, seat_torsos, sit_on, standing_floor, RoomTorsos,
     TorsoDataConfig, TorsoSource,
 };
 pub use error::{Result, VaeError};
