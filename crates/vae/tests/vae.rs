@@ -603,3 +603,40 @@ fn the_gated_vae_learns_its_gate_and_refuses_a_scene_where_nobody_can_be() {
         assert!(e.contains("gate"), "{e}");
     }
 }
+
+/// The seat grid: every place it gives affords the sitting or lying pose it names, and each
+/// seat whose sitting torso affords a pose has one of its places within 0.15 m.
+#[test]
+fn the_seat_grid_finds_a_place_on_every_seat() {
+    use envfield_affordance::Support;
+    let config = RegionConfig::default();
+    for seed in [5, 6] {
+        let room = generate_room(&RoomConfig::default(), seed).unwrap();
+        let grid = envfield_vae::seat_grid(&room, 0.1).unwrap();
+        assert!(!grid.is_empty());
+        for (t, kind) in &grid {
+            assert!(matches!(kind, Support::Sitting | Support::Lying));
+            let a = afford(&room.scene, *t, &config).unwrap();
+            assert!(a.kept() && a.valid == Some(*kind), "{t:?}: {a:?}");
+        }
+        for s in envfield_vae::seat_torsos(&room).unwrap() {
+            if afford(&room.scene, s, &config).unwrap().valid.is_none() {
+                continue;
+            }
+            let near = grid.iter().map(|(t, _)| {
+                ((t[0] - s[0]).powi(2) + (t[1] - s[1]).powi(2) + (t[2] - s[2]).powi(2)).sqrt()
+            });
+            let d = near.fold(f32::INFINITY, f32::min);
+            assert!(
+                d < 0.15,
+                "room {seed}: seat torso {s:?} is {d} m from the grid"
+            );
+        }
+    }
+    assert!(
+        envfield_vae::seat_grid(&generate_room(&RoomConfig::default(), 5).unwrap(), 0.0)
+            .unwrap_err()
+            .to_string()
+            .contains("spacing")
+    );
+}
