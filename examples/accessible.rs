@@ -12,7 +12,9 @@
 //! `field_exact.png` and `field_learned.png` (top-down, the field at each column's highest
 //! accessible voxel, for one goal) and `summary.json`. `--rooms N` evaluates N generated
 //! rooms of seeds 10000.. (training used 0..200) against two controls, an untrained VAE and
-//! uniform samples in the room's box; its last line is one JSON object.
+//! uniform samples in the room's box; its last line is one JSON object. The default VAE is the
+//! gated local one (`models/vae_gated.safetensors`); `--vae models/vae.safetensors` is the
+//! paper's.
 
 use anyhow::{bail, Context, Result};
 use clap::Parser;
@@ -39,7 +41,7 @@ struct Args {
     /// Seed of the generated room (10000 and up were never trained on).
     #[arg(long, default_value_t = 10_000)]
     seed: u64,
-    /// The VAE's weights.
+    /// The VAE's weights (default: the shipped gated VAE, `models/vae_gated.safetensors`).
     #[arg(long)]
     vae: Option<PathBuf>,
     /// Torso samples drawn per room.
@@ -92,7 +94,9 @@ fn region_config(args: &Args) -> RegionConfig {
 fn vae_file(args: &Args) -> PathBuf {
     args.vae
         .clone()
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("models/vae.safetensors"))
+        .unwrap_or_else(|| {
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("models/vae_gated.safetensors")
+        })
 }
 
 /// The VAE's cloud of a scene: its own number of surface points.
