@@ -92,11 +92,9 @@ fn region_config(args: &Args) -> RegionConfig {
 }
 
 fn vae_file(args: &Args) -> PathBuf {
-    args.vae
-        .clone()
-        .unwrap_or_else(|| {
-            Path::new(env!("CARGO_MANIFEST_DIR")).join("models/vae_gated.safetensors")
-        })
+    args.vae.clone().unwrap_or_else(|| {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("models/vae_gated.safetensors")
+    })
 }
 
 /// The VAE's cloud of a scene: its own number of surface points.
