@@ -59,6 +59,12 @@ struct Args {
     /// Training steps of each learned field.
     #[arg(long, default_value_t = 3000)]
     field_steps: u64,
+    /// Fourier frequencies of the learned field's input encoding (default: `Field3Config`'s).
+    #[arg(long)]
+    field_fourier: Option<usize>,
+    /// Hidden width of the learned field's network (default: `Field3Config`'s).
+    #[arg(long)]
+    field_hidden: Option<usize>,
     /// Radius of the torso sphere the filter keeps clear of geometry, metres.
     #[arg(long)]
     torso_radius: Option<f32>,
@@ -87,6 +93,21 @@ fn region_config(args: &Args) -> RegionConfig {
     let d = RegionConfig::default();
     RegionConfig {
         torso_radius: args.torso_radius.unwrap_or(d.torso_radius),
+        ..d
+    }
+}
+
+/// The learned field's training config: `Field3Config`'s defaults under the `--field-*` flags.
+fn field_config(args: &Args, seed: u64) -> Field3Config {
+    let d = Field3Config::default();
+    Field3Config {
+        steps: args.field_steps,
+        seed,
+        mlp: envfield::nets::MlpConfig {
+            fourier: args.field_fourier.unwrap_or(d.mlp.fourier),
+            hidden: args.field_hidden.unwrap_or(d.mlp.hidden),
+            ..d.mlp.clone()
+        },
         ..d
     }
 }
@@ -226,10 +247,7 @@ fn one(args: &Args, vae: &Cvae) -> Result<()> {
         None
     } else {
         let bar = progress(args.field_steps, "learned 3D field")?;
-        let cfg = Field3Config {
-            steps: args.field_steps,
-            ..Field3Config::default()
-        };
+        let cfg = field_config(args, 0);
         let (net, report) = train_field3(&region, &cfg, None, |s, _, _| bar.set_position(s))?;
         bar.finish_and_clear();
         let field = LearnedField3::new(&net, &region, exact.goal())?;
@@ -316,11 +334,7 @@ fn many(args: &Args, vae: &Cvae, rooms: u64) -> Result<()> {
         uniform.push(region_quality(&room, &box_samples, &config)?);
         if !args.no_field && k < args.field_rooms {
             let region = AccessibleRegion::from_drawn(&room.scene, &samples, &config)?;
-            let cfg = Field3Config {
-                steps: args.field_steps,
-                seed,
-                ..Field3Config::default()
-            };
+            let cfg = field_config(args, seed);
             let (_, report) = train_field3(&region, &cfg, None, |_, _, _| {})?;
             eprintln!("room {seed}: learned field {report:?}");
             fields.push(report);
