@@ -106,7 +106,7 @@ fn field_config(args: &Args, seed: u64) -> Field3Config {
         mlp: envfield::nets::MlpConfig {
             fourier: args.field_fourier.unwrap_or(d.mlp.fourier),
             hidden: args.field_hidden.unwrap_or(d.mlp.hidden),
-            ..d.mlp.clone()
+            ..d.mlp
         },
         ..d
     }
