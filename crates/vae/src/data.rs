@@ -334,27 +334,28 @@ pub fn room_torsos(room: &Room, cfg: &TorsoDataConfig, seed: u64) -> Result<Room
         standing_floor(scene, bounds, cfg.floor_spacing)?,
         TorsoSource::Stand,
     );
-    if cfg.seat_grid {
-        for (t, kind) in seat_grid(room, cfg.floor_spacing)? {
-            let source = match kind {
-                Support::Lying => TorsoSource::Lie,
-                _ => TorsoSource::Sit,
-            };
-            push(vec![t], source);
-        }
-    }
     let mut kinds: Vec<Option<Support>> =
         crate::afford_all(scene, &torsos, &crate::RegionConfig::default())?
             .iter()
             .map(|a| a.valid.filter(|_| a.kept()))
             .collect();
     if cfg.affordable_only {
-        let keep: Vec<bool> = kinds.iter().map(Option::is_some).collect();
-        let mut k = keep.iter();
-        torsos.retain(|_| *k.next().unwrap_or(&false));
-        let mut k = keep.iter();
-        sources.retain(|_| *k.next().unwrap_or(&false));
+        let mut keep = kinds.iter().map(Option::is_some);
+        torsos.retain(|_| keep.next().unwrap_or(false));
+        let mut keep = kinds.iter().map(Option::is_some);
+        sources.retain(|_| keep.next().unwrap_or(false));
         kinds.retain(Option::is_some);
+    }
+    // The seat grid's places come with the kind the filter found there: no second pass.
+    if cfg.seat_grid {
+        for (t, kind) in seat_grid(room, cfg.floor_spacing)? {
+            torsos.push(t);
+            sources.push(match kind {
+                Support::Lying => TorsoSource::Lie,
+                _ => TorsoSource::Sit,
+            });
+            kinds.push(Some(kind));
+        }
     }
     let cloud = sample_surface(scene, cfg.cloud_points, seed ^ 0xC10D)?
         .iter()
