@@ -12,7 +12,7 @@
 use criterion::{criterion_group, criterion_main, BatchSize, BenchmarkId, Criterion};
 use envfield::eikonal::FastMarching;
 use envfield::nets::FieldNet;
-use envfield::plan::{random_trips, Crowd, CrowdConfig, OrcaConfig, OrcaCrowd};
+use envfield::plan::crowd::{random_trips, Crowd, CrowdConfig, OrcaConfig, OrcaCrowd};
 use envfield::scene::{floor_map, generate_room, FloorMapConfig, RoomConfig};
 use std::path::Path;
 

@@ -11,9 +11,9 @@
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use envfield::grid::{Cell3, ContinuousField3, Grid3, SplitMix64};
 use envfield::nets::{FieldNet, GoalConfig, ModelConfig, TargetEncoding};
+use envfield::rooms::{AccessibleRegion, ExactField3, Field3Config, LearnedField3};
 use envfield::scene::nalgebra::Point3;
 use envfield::scene::VoxelFrame;
-use envfield::vae::{AccessibleRegion, ExactField3, Field3Config, LearnedField3};
 use std::hint::black_box;
 
 #[global_allocator]

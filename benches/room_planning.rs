@@ -3,6 +3,8 @@
 //! the shipped learned field and on the exact field, ours without affordance, PRM (its roadmap
 //! built inside each call), RRT* at 500, 5000 and 20000 iterations and RRT, on the accessible
 //! region the shipped VAE gives generated room 10000, for four walking pairs taken in turn.
+//! Ours on the learned field makes its field of the goal inside each call, and on the exact
+//! field its fast marching from the goal.
 //!
 //! `cargo bench --bench room_planning`
 
@@ -13,11 +15,11 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use envfield::affordance::{walk, Support, WalkConfig};
 use envfield::grid::{ContinuousField3, Point3m};
 use envfield::nets::FieldNet;
-use envfield::plan::{prm, rrt, rrt_star, FieldSearch3, SamplingConfig, StepFilter};
-use envfield::scene::{generate_room, sample_surface, RoomConfig};
-use envfield::vae::{
-    afford, AccessibleRegion, Cvae, ExactField3, LearnedField3, PoseFilter, RegionConfig,
-};
+use envfield::plan::space3::SamplingConfig;
+use envfield::rooms::harness::{Pair, PairKind, PairSetup, PlannerKind};
+use envfield::rooms::{afford, sample_region, ExactField3, LearnedField3, RegionConfig};
+use envfield::scene::{generate_room, RoomConfig};
+use envfield::vae::Cvae;
 use std::hint::black_box;
 use std::path::Path;
 
@@ -32,14 +34,8 @@ fn bench_rooms(c: &mut Criterion) {
     let seed = 10_000;
     let room = generate_room(&RoomConfig::default(), seed).expect("room");
     // The region exactly as room_nav makes it.
-    let cloud: Vec<[f32; 3]> = sample_surface(&room.scene, vae.cloud_points(), seed)
-        .expect("cloud")
-        .iter()
-        .map(|p| [p.x, p.y, p.z])
-        .collect();
-    let drawn = vae.sample(&cloud, 6000, seed).expect("samples");
+    let region = sample_region(&vae, &room.scene, 6000, seed).expect("region");
     let config = RegionConfig::default();
-    let region = AccessibleRegion::from_drawn(&room.scene, &drawn, &config).expect("region");
     let standing: Vec<Point3m> = region
         .samples
         .iter()
@@ -50,7 +46,6 @@ fn bench_rooms(c: &mut Criterion) {
         })
         .collect();
     let gait = walk(&WalkConfig::default(), seed).expect("gait");
-    let step = gait.step_length();
     // Four pairs at least 2 m apart that every planner reaches.
     let mut pairs = Vec::new();
     let mut k = 0;
@@ -63,74 +58,55 @@ fn bench_rooms(c: &mut Criterion) {
         let exact = ExactField3::new(&region, b).expect("field");
         let d = exact.value(a).expect("value");
         if d.is_finite() && d > 2.0 {
-            pairs.push((a, b, region.cell(b, "goal").expect("goal"), d));
+            let pair = Pair {
+                start: a,
+                goal: b,
+                sequence: gait.clone(),
+                repeat: true,
+                kind: PairKind::Walk,
+            };
+            pairs.push((pair, region.cell(b, "goal").expect("goal"), d as f64));
         }
     }
-    // room_nav's budget: five times the steps of the shortest walk.
-    let search = |shortest: f32| FieldSearch3 {
-        step,
-        tolerance: 0.02,
-        max_steps: (5.0 * shortest / step) as usize + 200,
-    };
-    let poses = PoseFilter {
-        scene: &room.scene,
-        region: &region,
-        sequence: &gait,
-        repeat: true,
-        face_the_move: true,
-        affordance: Default::default(),
-    };
-    let sampling = SamplingConfig {
-        step: step.max(0.05),
-        ..SamplingConfig::default()
-    };
+    let sampling_seed = SamplingConfig::default().seed;
     let mut group = c.benchmark_group("room_planning");
     group.sample_size(10);
-    let names = [
-        "ours",
-        "ours_exact",
-        "ours_noaff",
-        "prm",
-        "rrtstar",
-        "rrtstar_5000",
-        "rrtstar_20000",
-        "rrt",
+    let rows = [
+        ("ours", PlannerKind::Ours, 0),
+        ("ours_exact", PlannerKind::OursExact, 0),
+        ("ours_noaff", PlannerKind::OursNoAff, 0),
+        ("prm", PlannerKind::Prm, 0),
+        ("rrtstar", PlannerKind::RrtStar, 0),
+        ("rrtstar_5000", PlannerKind::RrtStarBig, 5000),
+        ("rrtstar_20000", PlannerKind::RrtStarBig, 20_000),
+        ("rrt", PlannerKind::Rrt, 0),
     ];
-    for name in names {
+    for (name, planner, big_budget) in rows {
         group.bench_function(BenchmarkId::new(name, pairs.len()), |b| {
             let mut i = 0;
             b.iter(|| {
-                let (start, goal, cell, shortest) = pairs[i % pairs.len()];
+                let (pair, cell, shortest) = &pairs[i % pairs.len()];
                 i += 1;
-                let search = search(shortest);
-                let path = match name {
-                    "ours" => {
-                        let learned = LearnedField3::new(&net, &region, cell).expect("learned");
-                        search.search_relaxed(&learned, &poses, &region, start, goal)
+                // room_nav's budget: five times the steps of the shortest walk.
+                let setup = PairSetup::new(
+                    &room.scene,
+                    &region,
+                    pair,
+                    *shortest,
+                    5.0,
+                    big_budget,
+                    sampling_seed,
+                );
+                let path = match planner.field() {
+                    Some(envfield::rooms::harness::FieldKind::Learned) => {
+                        let learned = LearnedField3::new(&net, &region, *cell).expect("learned");
+                        planner.plan(&setup, Some(&learned), pair.start, pair.goal)
                     }
-                    "ours_exact" => {
-                        let exact = ExactField3::at_cell(&region, cell).expect("exact");
-                        search.search_relaxed(&exact, &poses, &region, start, goal)
+                    Some(envfield::rooms::harness::FieldKind::Exact) => {
+                        let exact = ExactField3::at_cell(&region, *cell).expect("exact");
+                        planner.plan(&setup, Some(&exact), pair.start, pair.goal)
                     }
-                    "ours_noaff" => {
-                        let learned = LearnedField3::new(&net, &region, cell).expect("learned");
-                        let f = &region as &dyn StepFilter;
-                        search
-                            .search(&learned, f, start, goal)
-                            .and_then(|raw| search.shortcut(f, &raw, goal))
-                    }
-                    "prm" => prm(&region, start, goal, &sampling),
-                    "rrtstar" => rrt_star(&region, start, goal, &sampling),
-                    "rrtstar_5000" | "rrtstar_20000" => rrt_star(
-                        &region,
-                        start,
-                        goal,
-                        &SamplingConfig {
-                            budget: if name == "rrtstar_5000" { 5000 } else { 20_000 },
-                            ..sampling
-                        },
-                    ),
-                    _ => rrt(&region, start, goal, &sampling),
+                    None => planner.plan(&setup, None, pair.start, pair.goal),
                 };
                 black_box(path.expect("plan"))
             })

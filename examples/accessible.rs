@@ -18,12 +18,14 @@
 
 use anyhow::{bail, Context, Result};
 use clap::Parser;
-use envfield::grid::{Cell3, ContinuousField3, Field2, HeatMapStyle};
-use envfield::scene::{generate_room, sample_surface, Room, RoomConfig, Scene, TriangleMesh};
-use envfield::vae::{
-    afford_all, region_quality, train_field3, uniform_in_room, AccessibleRegion, Cvae, ExactField3,
-    Field3Config, LearnedField3, RegionConfig, RegionQuality,
+use envfield::rooms::pictures::write_field_view;
+use envfield::rooms::{
+    afford_all, draw_torsos, middle_goal, region_quality, train_field3, uniform_in_room,
+    AccessibleRegion, ExactField3, Field3Config, Field3Report, LearnedField3, RegionConfig,
+    RegionQuality,
 };
+use envfield::scene::{generate_room, Room, RoomConfig, Scene, TriangleMesh};
+use envfield::vae::{Cvae, Gate, SampleOptions};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -118,14 +120,6 @@ fn vae_file(args: &Args) -> PathBuf {
     })
 }
 
-/// The VAE's cloud of a scene: its own number of surface points.
-fn cloud(vae: &Cvae, scene: &Scene, seed: u64) -> Result<Vec<[f32; 3]>> {
-    Ok(sample_surface(scene, vae.cloud_points(), seed)?
-        .iter()
-        .map(|p| [p.x, p.y, p.z])
-        .collect())
-}
-
 /// `args.samples` torsos of `vae` in `scene`: drawn as `vae` draws them, or next to `anchors`'
 /// samples (moved by the local VAE's jitter) when `--anchors-from` is given. A gated VAE's
 /// gate is off with `--no-gate` or `gate_off`.
@@ -137,50 +131,15 @@ fn draw(
     seed: u64,
     gate_off: bool,
 ) -> Result<Vec<[f32; 3]>> {
-    let c = cloud(vae, scene, seed)?;
-    let Some(first) = anchors else {
-        let trained = vae.config().local.and_then(|l| l.gate).map(|g| g.threshold);
-        let gate = match args.no_gate || gate_off {
-            true => None,
-            false => args.gate_threshold.or(trained),
-        };
-        return Ok(vae.sample_gated(&c, args.samples, seed, args.temperature, gate)?);
+    let gate = match (args.no_gate || gate_off, args.gate_threshold) {
+        (true, _) => Gate::Off,
+        (false, Some(t)) => Gate::Threshold(t),
+        (false, None) => Gate::Trained,
     };
-    let jitter = vae.config().local.map_or(0.0, |l| l.jitter);
-    let firsts = first.sample(&cloud(first, scene, seed)?, args.samples, seed ^ 0xF1F1)?;
-    // Moved as in training: a standard-normal step of `jitter` in x and y.
-    let g = envfield::vae::normals(2 * firsts.len(), seed ^ 0x7E77);
-    let at: Vec<[f32; 2]> = firsts
-        .iter()
-        .zip(g.chunks_exact(2))
-        .map(|(t, g)| [t[0] + jitter * g[0], t[1] + jitter * g[1]])
-        .collect();
-    Ok(vae.sample_around(&c, &at, seed, args.temperature)?)
-}
-
-/// A top-down picture of a 3D field: each column's value at its highest accessible voxel.
-fn field_png(region: &AccessibleRegion, field: &dyn ContinuousField3, path: &Path) -> Result<()> {
-    let [nx, ny, nz] = region.frame.shape;
-    let mut values = vec![f32::INFINITY; nx * ny];
-    for x in 0..nx {
-        for y in 0..ny {
-            if let Some(z) = (0..nz)
-                .rev()
-                .find(|&z| region.grid.is_free(Cell3::new(x, y, z)))
-            {
-                let c = region.frame.center(Cell3::new(x, y, z));
-                values[(ny - 1 - y) * nx + x] = field.value([c.x, c.y, c.z])?;
-            }
-        }
-    }
-    Field2::new(ny, nx, values)?.write_png(
-        path,
-        &HeatMapStyle {
-            scale: 6,
-            ..HeatMapStyle::default()
-        },
-    )?;
-    Ok(())
+    let options = SampleOptions::new(args.samples, seed)
+        .with_temperature(args.temperature)
+        .with_gate(gate);
+    Ok(draw_torsos(vae, scene, &options, anchors)?)
 }
 
 fn progress(len: u64, what: &str) -> Result<ProgressBar> {
@@ -189,23 +148,6 @@ fn progress(len: u64, what: &str) -> Result<ProgressBar> {
         "{msg:>24} {bar:30} {pos}/{len} {elapsed_precise} (eta {eta})",
     )?);
     Ok(bar)
-}
-
-/// A goal for the pictures: the kept sample nearest the region's middle.
-fn middle_goal(region: &AccessibleRegion) -> [f32; 3] {
-    let n = region.samples.len() as f32;
-    let mean = region.samples.iter().fold([0.0f32; 3], |a, s| {
-        [a[0] + s[0] / n, a[1] + s[1] / n, a[2] + s[2] / n]
-    });
-    *region
-        .samples
-        .iter()
-        .filter(|s| region.contains(**s))
-        .min_by(|a, b| {
-            let d = |s: &[f32; 3]| (s[0] - mean[0]).powi(2) + (s[1] - mean[1]).powi(2);
-            d(a).total_cmp(&d(b))
-        })
-        .unwrap_or(&region.samples[0])
 }
 
 fn one(args: &Args, vae: &Cvae) -> Result<()> {
@@ -238,7 +180,7 @@ fn one(args: &Args, vae: &Cvae) -> Result<()> {
     region.write_png(args.out.join("region.png"), 6)?;
     let goal = middle_goal(&region);
     let exact = ExactField3::new(&region, goal)?;
-    field_png(&region, &exact, &args.out.join("field_exact.png"))?;
+    write_field_view(&region, &exact, args.out.join("field_exact.png"))?;
     let quality = match &room {
         Some(r) => Some(region_quality(r, &samples, &config)?),
         None => None,
@@ -251,7 +193,7 @@ fn one(args: &Args, vae: &Cvae) -> Result<()> {
         let (net, report) = train_field3(&region, &cfg, None, |s, _, _| bar.set_position(s))?;
         bar.finish_and_clear();
         let field = LearnedField3::new(&net, &region, exact.goal())?;
-        field_png(&region, &field, &args.out.join("field_learned.png"))?;
+        write_field_view(&region, &field, args.out.join("field_learned.png"))?;
         Some(report)
     };
     // How high the drawn samples are, in bands of 0.1 m (before the filter).
@@ -347,7 +289,7 @@ fn many(args: &Args, vae: &Cvae, rooms: u64) -> Result<()> {
         .enumerate()
         .map(|(k, q)| serde_json::json!({"seed": 10_000 + k as u64, "quality": q}))
         .collect();
-    let fm = |f: fn(&envfield::vae::Field3Report) -> f64| {
+    let fm = |f: fn(&Field3Report) -> f64| {
         fields.iter().map(f).sum::<f64>() / fields.len().max(1) as f64
     };
     let o = mean(&ours);

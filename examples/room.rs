@@ -21,8 +21,8 @@ use envfield::grid::{Cell2, HeatMapStyle, MoveRule};
 use envfield::plan::descend;
 use envfield::scene::nalgebra::{distance, Point3};
 use envfield::scene::{
-    floor_map, free_components, generate_room, sample_surface, write_point_cloud,
-    write_polyline_obj, FloorMapConfig, RoomConfig, Scene, TriangleMesh,
+    floor_map, generate_room, sample_surface, write_point_cloud, write_polyline_obj,
+    FloorMapConfig, RoomConfig, Scene, TriangleMesh,
 };
 
 #[global_allocator]
@@ -95,7 +95,7 @@ fn main() -> Result<()> {
     let walkable = map.inflated(args.body_radius)?;
 
     // Start and goal: the two ends of the longest shortest path in the largest free region.
-    let (labels, sizes) = free_components(&walkable);
+    let envfield::grid::Components { labels, sizes } = walkable.free_components();
     let largest = (0..sizes.len())
         .max_by_key(|&k| sizes[k])
         .context("no floor is wide enough for the body radius")?;

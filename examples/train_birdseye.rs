@@ -14,14 +14,13 @@ use std::path::PathBuf;
 use anyhow::{Context, Result};
 use clap::Parser;
 use envfield::eikonal::FastMarching;
-use envfield::grid::{Cell2, Grid2, Maze, MoveRule, Point2, SplitMix64};
-use envfield::mazes::{target_field, Dataset, Sample, TargetKind};
+use envfield::grid::{Maze, MoveRule, SplitMix64};
 use envfield::nets::{
     parse_convs, Arch, DataCheck, FieldNet, ModelConfig, PathConfig, TargetEncoding, TrainConfig,
     Trainer,
 };
-use envfield::plan::{evaluate, mark_discs, EvalConfig, FieldDescent, Octile};
-use envfield::scene::{floor_map, generate_room, FloorMapConfig, RoomConfig};
+use envfield::plan::{evaluate, EvalConfig, FieldDescent, Octile};
+use envfield::rooms::birdseye::{changed_map, training_maps, walkable_map, BODY, RESOLUTION, SIDE};
 use indicatif::{ProgressBar, ProgressStyle};
 
 #[global_allocator]
@@ -62,86 +61,11 @@ struct Args {
     seed: u64,
 }
 
-/// Floor-map cell side, metres.
-const RESOLUTION: f32 = 0.1;
-/// Body radius, metres (0.25 m: shoulders about 0.5 m wide).
-const BODY: f32 = 0.25;
-/// The map side every room is padded to.
-const SIDE: usize = 64;
-
-/// The walkable 64x64 map of room `seed`.
-fn walkable(seed: u64) -> Result<Grid2> {
-    let room = generate_room(&RoomConfig::birdseye(), seed)?;
-    let map = floor_map(
-        &room.scene,
-        &FloorMapConfig {
-            resolution: RESOLUTION,
-            ..FloorMapConfig::default()
-        },
-    )?;
-    Ok(map.walkable(BODY, Some([SIDE, SIDE]))?)
-}
-
-/// `grid` changed as other people change it: up to `max_people` discs (two body radii, in
-/// centre space) at random free cells and a random fraction below `max_extra` of the free
-/// cells turned into obstacles.
-fn changed(grid: &Grid2, rng: &mut SplitMix64, max_people: usize, max_extra: f32) -> Result<Grid2> {
-    let free: Vec<Cell2> = grid.free_cells().collect();
-    let people = rng.below(max_people + 1);
-    let centres: Vec<Point2> = (0..people)
-        .map(|_| {
-            let c = free[rng.below(free.len())];
-            Point2::new(c.row as f32, c.col as f32)
-        })
-        .collect();
-    let mut out = mark_discs(grid, centres.into_iter(), 2.0 * BODY / RESOLUTION)?;
-    let extra = rng.next_f32() * max_extra;
-    for &c in &free {
-        if rng.next_f32() < extra {
-            out.set_obstacle(c, true)?;
-        }
-    }
-    Ok(out)
-}
-
-/// A random free cell of `grid` in its largest connected region (8-connected, strict).
-fn goal_cell(grid: &Grid2, rng: &mut SplitMix64) -> Option<Cell2> {
-    let (labels, sizes) = envfield::scene::free_components(grid);
-    let largest = (0..sizes.len()).max_by_key(|&k| sizes[k])?;
-    let cells: Vec<usize> = (0..labels.len())
-        .filter(|&i| labels[i] == largest)
-        .collect();
-    Some(grid.cell(cells[rng.below(cells.len())]))
-}
-
-fn dataset(rooms: std::ops::Range<u64>, goals: usize, seed: u64) -> Result<Dataset> {
-    let target = TargetKind::Graph(MoveRule::Strict);
-    let mut samples = Vec::new();
-    for (k, room) in rooms.enumerate() {
-        let grid = walkable(room)?;
-        let mut rng = SplitMix64::new(seed ^ room.wrapping_mul(0x9E37_79B9_7F4A_7C15));
-        for _ in 0..goals {
-            let map = changed(&grid, &mut rng, 7, 0.08)?;
-            let Some(goal) = goal_cell(&map, &mut rng) else {
-                continue;
-            };
-            let distance = target_field(&map, goal, target)?.into_values();
-            samples.push(Sample {
-                maze: k,
-                grid: map,
-                goal,
-                distance,
-            });
-        }
-    }
-    Ok(Dataset { samples })
-}
-
 fn train(args: &Args) -> Result<()> {
     let ckpt = PathBuf::from(format!("{}.ckpt", args.out.display()));
     let t0 = std::time::Instant::now();
-    let data = dataset(0..args.rooms as u64, args.goals_per_room, args.seed)?;
-    let validation = dataset(2_000_000..2_000_064, 1, args.seed)?;
+    let data = training_maps(0..args.rooms as u64, args.goals_per_room, args.seed)?;
+    let validation = training_maps(2_000_000..2_000_064, 1, args.seed)?;
     eprintln!(
         "{} training maps from {} rooms in {:.1} s",
         data.samples.len(),
@@ -227,11 +151,11 @@ fn eval(args: &Args) -> Result<()> {
         let mazes: Vec<Maze> = rooms
             .clone()
             .map(|room| {
-                let grid = walkable(room)?;
+                let grid = walkable_map(room)?;
                 let mut rng = SplitMix64::new(room ^ 0xB1BD);
                 let grid = match people {
                     0 => grid,
-                    n => changed(&grid, &mut rng, n, 0.0)?,
+                    n => changed_map(&grid, &mut rng, n, 0.0)?,
                 };
                 Ok(Maze {
                     grid,

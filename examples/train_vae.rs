@@ -11,9 +11,8 @@
 
 use anyhow::{bail, Context, Result};
 use clap::Parser;
-use envfield::vae::{
-    rooms_torsos, Cvae, TorsoDataConfig, TorsoSource, VaeConfig, VaeTrainConfig, VaeTrainer,
-};
+use envfield::rooms::{rooms_torsos, TorsoDataConfig};
+use envfield::vae::{Cvae, TorsoSource, VaeConfig, VaeTrainConfig, VaeTrainer};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
 use std::time::Instant;

@@ -13,10 +13,11 @@
 //!   bird's-eye floor map.
 //! - [`affordance`] (feature `scene`): SMPL-layout poses and sequences, procedural motions,
 //!   support and collision checks, alignment to trajectories.
-//! - [`vae`] (feature `vae`): the conditional VAE of torso locations, accessible regions, and
-//!   exact and learned 3D fields.
+//! - [`vae`] (feature `vae`): the conditional VAE of torso locations and its trainer.
+//! - [`rooms`] (feature `rooms`): people in furnished rooms: accessible regions, exact and
+//!   learned 3D fields, pose filters, the room navigation harness and the crowd protocol.
 //!
-//! The three features are on by default. With `default-features = false` envfield is grids, fast
+//! The four features are on by default. With `default-features = false` envfield is grids, fast
 //! marching, mazes and planners, and pulls in neither candle nor parry3d. The `cuda` feature
 //! runs the networks on an NVIDIA GPU through candle.
 //!
@@ -41,6 +42,8 @@ pub use envfield_mazes as mazes;
 #[cfg(feature = "nets")]
 pub use envfield_nets as nets;
 pub use envfield_plan as plan;
+#[cfg(feature = "rooms")]
+pub use envfield_rooms as rooms;
 #[cfg(feature = "scene")]
 pub use envfield_scene as scene;
 #[cfg(feature = "vae")]

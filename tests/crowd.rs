@@ -5,7 +5,7 @@
 use envfield::eikonal::FastMarching;
 use envfield::grid::{Cell2, FieldModel, Grid2};
 use envfield::nets::FieldNet;
-use envfield::plan::{random_trips, walk_crowd, CrowdConfig, Trip};
+use envfield::plan::crowd::{random_trips, walk_crowd, CrowdConfig, Trip};
 use envfield::scene::{floor_map, generate_room, FloorMapConfig, RoomConfig};
 use std::path::Path;
 
@@ -67,7 +67,7 @@ fn the_windowed_batch_of_one_step_matches_one_by_one_prediction() {
     let maps: Vec<Grid2> = (0..people.len())
         .map(|i| {
             let others = (0..people.len()).filter(|&j| j != i).map(|j| people[j]);
-            envfield::plan::mark_discs(&room, others, 5.0).unwrap()
+            envfield::plan::crowd::mark_discs(&room, others, 5.0).unwrap()
         })
         .collect();
     let goals: Vec<Cell2> = people

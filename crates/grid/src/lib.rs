@@ -10,7 +10,8 @@
 //!   [`Point2`] / [`Point3`]; `f32::INFINITY` marks unreachable cells.
 //! - [`MoveRule`] (`strict`, `vin`) and [`Neighbourhood2`] / [`Neighbourhood3`]: who steps where.
 //! - The maze text format ([`parse_mazes`], [`read_mazes`], [`write_mazes`]), PNG input and
-//!   heat-map output ([`HeatMapStyle`]), `.npy` input/output ([`NpyArray`]).
+//!   heat-map output ([`HeatMapStyle`]), `.npy` input/output ([`NpyArray`]), and
+//!   [`Canvas`], the picture kit (dots, segments, discs; PNG and GIF).
 //! - [`FieldModel`]: "the reaching-distance field of this grid for this goal", implemented by
 //!   the exact solvers and by every learned model.
 //! - [`Symmetry`]: the eight transposes and flips of a grid, under which both move rules look
@@ -37,7 +38,9 @@
 //! # Ok::<(), envfield_grid::GridError>(())
 //! ```
 
+mod canvas;
 mod cell;
+mod components;
 mod ensemble;
 mod error;
 mod field;
@@ -53,7 +56,9 @@ mod steps;
 mod symmetry;
 pub mod synth;
 
+pub use canvas::{tint, Canvas};
 pub use cell::{Cell2, Cell3, Point2, Point3};
+pub use components::Components;
 pub use ensemble::Ensemble;
 pub use error::{GridError, Result};
 pub use field::{Field2, Field3};
@@ -64,6 +69,6 @@ pub use model::{ContinuousField2, ContinuousField3, FieldModel, Point3m};
 pub use moves::{MoveRule, Neighbourhood2, Neighbourhood3, DIRECTIONS_8};
 pub use npy::{NpyArray, NpyData};
 pub use png::{HeatMapStyle, MAX_PNG_PIXELS, OBSTACLE_COLOR, UNREACHABLE_COLOR};
-pub use rng::SplitMix64;
+pub use rng::{normals, SplitMix64};
 pub use steps::{descent_move, is_wrong_move, octile_distance, Policy};
 pub use symmetry::{Symmetric, Symmetry};

@@ -35,4 +35,23 @@ impl SplitMix64 {
     pub fn below(&mut self, n: usize) -> usize {
         (((self.next_u64() >> 11) as u128 * n as u128) >> 53) as usize
     }
+
+    /// Uniform in `(0, 1)`, never 0, so its logarithm is finite.
+    pub fn open_unit(&mut self) -> f64 {
+        ((self.next_u64() >> 11) as f64 + 0.5) / (1u64 << 53) as f64
+    }
+
+    /// A draw of the standard normal (Box-Muller, the cosine branch, from two
+    /// [`open_unit`](Self::open_unit) draws).
+    pub fn next_normal(&mut self) -> f64 {
+        let (u1, u2) = (self.open_unit(), self.open_unit());
+        (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+    }
+}
+
+/// `n` draws of the standard normal from a generator seeded with `seed`
+/// ([`SplitMix64::next_normal`]): the codes a VAE samples with, jitter, noise.
+pub fn normals(n: usize, seed: u64) -> Vec<f32> {
+    let mut rng = SplitMix64::new(seed);
+    (0..n).map(|_| rng.next_normal() as f32).collect()
 }

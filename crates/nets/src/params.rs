@@ -36,10 +36,6 @@ pub struct ParamStore {
     device: Device,
 }
 
-fn unit(rng: &mut SplitMix64) -> f64 {
-    ((rng.next_u64() >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-}
-
 impl ParamStore {
     /// An empty store whose initialisation draws from `seed`, on `device`.
     pub fn new(seed: u64, device: &Device) -> Self {
@@ -67,14 +63,10 @@ impl ParamStore {
         let data: Vec<f32> = match init {
             Init::Zeros => vec![0.0; n],
             Init::Uniform(b) => (0..n)
-                .map(|_| ((2.0 * unit(&mut self.rng) - 1.0) * b as f64) as f32)
+                .map(|_| ((2.0 * self.rng.open_unit() - 1.0) * b as f64) as f32)
                 .collect(),
             Init::Normal(std) => (0..n)
-                .map(|_| {
-                    let (u1, u2) = (unit(&mut self.rng), unit(&mut self.rng));
-                    let z = (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos();
-                    (z * std as f64) as f32
-                })
+                .map(|_| (self.rng.next_normal() * std as f64) as f32)
                 .collect(),
         };
         let var = Var::from_tensor(&Tensor::from_vec(data, shape, &self.device)?)?;

@@ -15,12 +15,13 @@
 //!   path), rechecking every path itself.
 //! - [`PolicyWalk`]: a planner for any [`Policy`](envfield_grid::Policy) (one decision per
 //!   step, as VIN makes them).
-//! - [`FieldSearch3`]: the pose-dependent search on a continuous 3D field (paper section 4.2),
-//!   each step's 26 candidates asked in one batch and filtered by a [`StepFilter`]; and the
-//!   sampling baselines [`rrt`], [`rrt_star`] and [`prm`] on any [`Space3`].
-//! - [`walk_crowd`]: several people on one floor map at once (paper Algorithm 1), each
-//!   person's field on the map the others change, one batched prediction per time step; and
-//!   [`orca_crowd`], the ORCA crowd loop beside it.
+//! - [`space3`]: the pose-dependent search on a continuous 3D field (paper section 4.2,
+//!   [`space3::FieldSearch3`]), each step's 26 candidates asked in one batch and filtered by a
+//!   [`space3::StepFilter`]; and the sampling baselines RRT, RRT* and PRM on any
+//!   [`space3::Space3`].
+//! - [`crowd`]: several people on one floor map at once (paper Algorithm 1,
+//!   [`crowd::walk_crowd`]), each person's field on the map the others change, one batched
+//!   prediction per time step; and [`crowd::orca_crowd`], the ORCA crowd loop beside it.
 //! - [`PlannerKind`]: planners by name (`field`, `relay`, `octile`, `fmm`, `astar`, ...), the
 //!   names the examples and benchmarks take.
 //!
@@ -40,7 +41,7 @@
 //! ```
 
 mod astar;
-mod crowd;
+pub mod crowd;
 mod descent;
 mod error;
 mod gradient;
@@ -50,14 +51,9 @@ mod planner;
 mod policy;
 mod profile;
 mod relay;
-mod sampling;
-mod search3;
+pub mod space3;
 
 pub use astar::{AStar, Octile};
-pub use crowd::{
-    check_trips, closest_approach, mark_discs, orca_crowd, random_trips, shortest_lengths,
-    walk_crowd, Crowd, CrowdConfig, CrowdRun, OrcaConfig, OrcaCrowd, Trip,
-};
 pub use descent::{descend, FieldDescent};
 pub use error::{PlanError, Result};
 pub use gradient::{gradient_descent, ContinuousPath, GradientDescentConfig};
@@ -69,7 +65,3 @@ pub use planner::{path_length, PlanOutcome, Planner};
 pub use policy::PolicyWalk;
 pub use profile::{Band, DecisionProfile};
 pub use relay::{relay_cells, remove_loops, RelayDescent};
-pub use sampling::{edge_free, prm, rrt, rrt_star, SamplingConfig, Space3};
-pub use search3::{
-    directions26, distance, straight_line, AnyStep, FieldSearch3, Path3, StepFilter,
-};

@@ -3,7 +3,7 @@
 
 use envfield_eikonal::FastMarching;
 use envfield_grid::{Cell2, Grid2, Point2};
-use envfield_plan::{
+use envfield_plan::crowd::{
     check_trips, closest_approach, orca_crowd, shortest_lengths, walk_crowd, CrowdConfig, CrowdRun,
     OrcaConfig, Trip,
 };

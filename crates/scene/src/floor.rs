@@ -256,50 +256,6 @@ pub fn floor_map(scene: &Scene, config: &FloorMapConfig) -> Result<FloorMap> {
     })
 }
 
-/// Labels the 4-connected components of free cells: `(labels, sizes)` where `labels[i]` is
-/// the component of cell `i` (`usize::MAX` for obstacles) and `sizes[k]` the cells of
-/// component `k`. O(cells).
-pub fn free_components(grid: &Grid2) -> (Vec<usize>, Vec<usize>) {
-    let (rows, cols) = (grid.rows(), grid.cols());
-    let obstacles = grid.obstacles();
-    let mut labels = vec![usize::MAX; obstacles.len()];
-    let mut sizes = Vec::new();
-    let mut stack = Vec::new();
-    for start in 0..obstacles.len() {
-        if obstacles[start] || labels[start] != usize::MAX {
-            continue;
-        }
-        let k = sizes.len();
-        let mut size = 0;
-        labels[start] = k;
-        stack.push(start);
-        while let Some(i) = stack.pop() {
-            size += 1;
-            let (r, c) = (i / cols, i % cols);
-            let mut visit = |j: usize| {
-                if !obstacles[j] && labels[j] == usize::MAX {
-                    labels[j] = k;
-                    stack.push(j);
-                }
-            };
-            if r > 0 {
-                visit(i - cols);
-            }
-            if r + 1 < rows {
-                visit(i + cols);
-            }
-            if c > 0 {
-                visit(i - 1);
-            }
-            if c + 1 < cols {
-                visit(i + 1);
-            }
-        }
-        sizes.push(size);
-    }
-    (labels, sizes)
-}
-
 #[cfg(test)]
 mod distance_tests {
     use super::*;

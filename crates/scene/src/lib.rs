@@ -39,7 +39,7 @@ mod sample;
 mod scene;
 
 pub use error::{Result, SceneError};
-pub use floor::{floor_map, free_components, FloorMap, FloorMapConfig, MapFrame};
+pub use floor::{floor_map, FloorMap, FloorMapConfig, MapFrame};
 pub use mesh::{write_point_cloud, write_polyline_obj, TriangleMesh};
 pub use room::{generate_room, Furniture, Room, RoomConfig};
 pub use sample::{sample_surface, voxelize, VoxelFrame, MAX_SURFACE_POINTS};

@@ -8,7 +8,7 @@ use nalgebra::{Isometry3, Point3, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Result, SceneError};
-use crate::floor::{floor_map, free_components, FloorMapConfig};
+use crate::floor::{floor_map, FloorMapConfig};
 use crate::scene::{ObjectKind, Primitive, Scene, SceneObject};
 
 /// What [`generate_room`] builds. Sizes are in metres; ranges are `[min, max]`.
@@ -315,7 +315,7 @@ fn floor_connected(scene: &Scene) -> Result<bool> {
             ..FloorMapConfig::default()
         },
     )?;
-    Ok(free_components(&map.grid).1.len() == 1)
+    Ok(map.grid.free_components().count() == 1)
 }
 
 fn shuffle<T>(items: &mut [T], rng: &mut SplitMix64) {

@@ -6,9 +6,8 @@ use envfield_grid::SplitMix64;
 use envfield_scene::parry3d::query::PointQuery;
 use envfield_scene::parry3d::shape::Cuboid;
 use envfield_scene::{
-    floor_map, free_components, generate_room, sample_surface, voxelize, FloorMapConfig,
-    ObjectKind, Part, Primitive, RoomConfig, Scene, SceneError, SceneObject, TriangleMesh,
-    VoxelFrame,
+    floor_map, generate_room, sample_surface, voxelize, FloorMapConfig, ObjectKind, Part,
+    Primitive, RoomConfig, Scene, SceneError, SceneObject, TriangleMesh, VoxelFrame,
 };
 use nalgebra::{Isometry3, Point3, Vector3};
 
@@ -308,7 +307,7 @@ fn rooms_keep_one_connected_floor_and_mark_furniture() {
         );
         let map = floor_map(&room.scene, &FloorMapConfig::default()).unwrap();
         assert!(map.floor_height.abs() < 1e-4);
-        let (labels, sizes) = free_components(&map.grid);
+        let envfield_grid::Components { labels, sizes } = map.grid.free_components();
         assert_eq!(
             sizes.len(),
             1,

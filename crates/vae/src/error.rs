@@ -8,8 +8,8 @@ pub enum VaeError {
     /// A setting that cannot work, named.
     #[error("invalid config: {0}")]
     InvalidConfig(String),
-    /// Input that cannot be used (an empty cloud, a NaN coordinate, a goal outside the
-    /// region), with what is wrong and where.
+    /// Input that cannot be used (an empty cloud, a NaN coordinate, a torso without a kind),
+    /// with what is wrong and where.
     #[error("invalid input: {0}")]
     InvalidInput(String),
     /// A weight file or checkpoint that does not fit.
@@ -31,18 +31,9 @@ pub enum VaeError {
     /// From envfield-nets.
     #[error(transparent)]
     Nets(#[from] envfield_nets::NetsError),
-    /// From envfield-scene.
-    #[error(transparent)]
-    Scene(#[from] envfield_scene::SceneError),
-    /// From envfield-affordance.
-    #[error(transparent)]
-    Affordance(#[from] envfield_affordance::AffordanceError),
     /// From envfield-grid.
     #[error(transparent)]
     Grid(#[from] envfield_grid::GridError),
-    /// From envfield-eikonal.
-    #[error(transparent)]
-    Eikonal(#[from] envfield_eikonal::EikonalError),
     /// From candle.
     #[error(transparent)]
     Candle(#[from] candle_core::Error),

@@ -1,9 +1,12 @@
 //! [`VaeTrainer`]: Adam on reconstruction plus cyclically annealed KL, seeded batches from
 //! [`RoomTorsos`], atomic checkpoints that resume exactly.
 
-use crate::model::{normals, XyIndex, FORMAT, KINDS};
+use crate::file::FORMAT;
+use crate::index::XyIndex;
+use crate::model::{KINDS, NORMAL_SALT};
 use crate::{Cvae, Result, RoomTorsos, TorsoSource, VaeError, VaeTrainConfig};
 use candle_core::Tensor;
+use envfield_grid::normals;
 use envfield_grid::SplitMix64;
 use envfield_nets::params::{to_safetensors, AdamW, TensorFile, META_STEP};
 use serde::{Deserialize, Serialize};
@@ -193,7 +196,7 @@ impl VaeTrainer {
                 match &local {
                     None => torsos.push(t),
                     Some(l) => {
-                        let g = normals(2, rng.next_u64());
+                        let g = normals(2, rng.next_u64() ^ NORMAL_SALT);
                         let anchor = [t[0] + l.jitter * g[0], t[1] + l.jitter * g[1]];
                         cloud.extend(index[r].neighbourhood(&room.cloud, anchor, l, &mut rng));
                         torsos.push([t[0] - anchor[0], t[1] - anchor[1], t[2]]);
@@ -213,7 +216,7 @@ impl VaeTrainer {
         let torsos = self.vae.coords(&torsos, "training torsos")?;
         let latent = self.vae.config().latent;
         let eps = Tensor::from_vec(
-            normals(b * k * latent, rng.next_u64()),
+            normals(b * k * latent, rng.next_u64() ^ NORMAL_SALT),
             (b * k, latent),
             self.vae.device(),
         )?;
@@ -399,14 +402,8 @@ impl VaeTrainer {
 }
 
 /// A pose kind's index among the [`KINDS`] outputs: standing, sitting, lying.
-fn kind_index(kind: Option<envfield_affordance::Support>) -> Result<usize> {
-    use envfield_affordance::Support;
-    match kind {
-        Some(Support::Standing) => Ok(0),
-        Some(Support::Sitting) => Ok(1),
-        Some(Support::Lying) => Ok(2),
-        None => Err(VaeError::InvalidInput(
-            "a torso location that affords no pose has no kind".into(),
-        )),
-    }
+fn kind_index(kind: Option<crate::PoseKind>) -> Result<usize> {
+    kind.map(crate::PoseKind::index).ok_or_else(|| {
+        VaeError::InvalidInput("a torso location that affords no pose has no kind".into())
+    })
 }

@@ -1,11 +1,9 @@
-//! The VAE, its training and files, the accessible region and the 3D fields: behaviour checked
-//! against known answers, and bad input refused with a clear error.
+//! The VAE, its training and files: behaviour checked against known answers, and bad input
+//! refused with a clear error. Trained on rooms, it is tested in envfield-rooms.
 
-use envfield_grid::{Cell3, ContinuousField3, Grid3};
-use envfield_scene::{generate_room, RoomConfig, Scene, TriangleMesh, VoxelFrame};
 use envfield_vae::{
-    afford, room_torsos, AccessibleRegion, Cvae, ExactField3, Field3Config, LearnedField3,
-    RegionConfig, TorsoDataConfig, TorsoSource, VaeConfig, VaeError, VaeTrainConfig, VaeTrainer,
+    Cvae, PoseKind, RoomTorsos, SampleOptions, TorsoSource, VaeConfig, VaeError, VaeKind,
+    VaeTrainConfig, VaeTrainer,
 };
 
 fn small() -> VaeConfig {
@@ -47,6 +45,8 @@ fn the_scene_feature_ignores_point_order() {
     reversed.reverse();
     reversed.rotate_left(37);
     let a = vae
+        .as_whole()
+        .unwrap()
         .scene_feature(&points)
         .unwrap()
         .flatten_all()
@@ -54,6 +54,8 @@ fn the_scene_feature_ignores_point_order() {
         .to_vec1::<f32>()
         .unwrap();
     let b = vae
+        .as_whole()
+        .unwrap()
         .scene_feature(&reversed)
         .unwrap()
         .flatten_all()
@@ -62,11 +64,13 @@ fn the_scene_feature_ignores_point_order() {
         .unwrap();
     assert_eq!(a, b);
     assert_eq!(
-        vae.sample(&points, 10, 4).unwrap(),
-        vae.sample(&reversed, 10, 4).unwrap()
+        vae.sample(&points, &SampleOptions::new(10, 4)).unwrap(),
+        vae.sample(&reversed, &SampleOptions::new(10, 4)).unwrap()
     );
     // Another cloud gives another feature.
     let c = vae
+        .as_whole()
+        .unwrap()
         .scene_feature(&cloud(200, 2))
         .unwrap()
         .flatten_all()
@@ -82,20 +86,27 @@ fn encode_decode_and_sample_have_their_shapes_and_are_seeded() {
     let vae = Cvae::new(small(), 0).unwrap();
     let points = cloud(64, 5);
     let (mean, log_var) = vae
+        .as_whole()
+        .unwrap()
         .encode(&points, &[[1.0, 1.0, 1.0], [2.0, 1.0, 0.5]])
         .unwrap();
     assert_eq!(mean.dims(), &[2, 4]);
     assert_eq!(log_var.dims(), &[2, 4]);
     let z = candle_core::Tensor::zeros((3, 4), candle_core::DType::F32, &candle_core::Device::Cpu)
         .unwrap();
-    assert_eq!(vae.decode(&points, &z).unwrap().len(), 3);
     assert_eq!(
-        vae.sample(&points, 7, 9).unwrap(),
-        vae.sample(&points, 7, 9).unwrap()
+        vae.as_whole().unwrap().decode(&points, &z).unwrap().len(),
+        3
+    );
+    assert_eq!(vae.kind(), VaeKind::Whole);
+    assert!(vae.as_local().is_none() && vae.as_gated().is_none());
+    assert_eq!(
+        vae.sample(&points, &SampleOptions::new(7, 9)).unwrap(),
+        vae.sample(&points, &SampleOptions::new(7, 9)).unwrap()
     );
     assert_ne!(
-        vae.sample(&points, 7, 9).unwrap(),
-        vae.sample(&points, 7, 10).unwrap()
+        vae.sample(&points, &SampleOptions::new(7, 9)).unwrap(),
+        vae.sample(&points, &SampleOptions::new(7, 10)).unwrap()
     );
 }
 
@@ -106,11 +117,14 @@ fn tempered_samples_spread_with_the_temperature() {
     let vae = Cvae::new(small(), 0).unwrap();
     let points = cloud(64, 5);
     assert_eq!(
-        vae.sample_tempered(&points, 50, 9, 1.0).unwrap(),
-        vae.sample(&points, 50, 9).unwrap()
+        vae.sample(&points, &SampleOptions::new(50, 9).with_temperature(1.0))
+            .unwrap(),
+        vae.sample(&points, &SampleOptions::new(50, 9)).unwrap()
     );
     let spread = |t: f32| {
-        let s = vae.sample_tempered(&points, 400, 9, t).unwrap();
+        let s = vae
+            .sample(&points, &SampleOptions::new(400, 9).with_temperature(t))
+            .unwrap();
         let mean: [f32; 3] = std::array::from_fn(|a| s.iter().map(|p| p[a]).sum::<f32>() / 400.0);
         s.iter()
             .map(|p| (0..3).map(|a| (p[a] - mean[a]).powi(2)).sum::<f32>())
@@ -125,7 +139,7 @@ fn tempered_samples_spread_with_the_temperature() {
     );
     for t in [0.0, -1.0, f32::NAN, 11.0] {
         let e = vae
-            .sample_tempered(&points, 5, 9, t)
+            .sample(&points, &SampleOptions::new(5, 9).with_temperature(t))
             .unwrap_err()
             .to_string();
         assert!(e.contains("temperature"), "{e}");
@@ -138,17 +152,19 @@ fn tempered_samples_spread_with_the_temperature() {
 fn bad_input_is_refused() {
     let vae = Cvae::new(small(), 0).unwrap();
     let err = |r: Result<Vec<[f32; 3]>, VaeError>| r.unwrap_err().to_string();
-    assert!(err(vae.sample(&[], 3, 0)).contains("no points"));
+    assert!(err(vae.sample(&[], &SampleOptions::new(3, 0))).contains("no points"));
     let mut bad = cloud(10, 1);
     bad[4][1] = f32::NAN;
-    assert!(err(vae.sample(&bad, 3, 0)).contains("point 4"));
+    assert!(err(vae.sample(&bad, &SampleOptions::new(3, 0))).contains("point 4"));
     assert!(vae
+        .as_whole()
+        .unwrap()
         .encode(&cloud(10, 1), &[[0.0, f32::INFINITY, 0.0]])
         .is_err());
     let z = candle_core::Tensor::zeros((3, 5), candle_core::DType::F32, &candle_core::Device::Cpu)
         .unwrap();
-    assert!(vae.decode(&cloud(10, 1), &z).is_err());
-    assert!(err(vae.sample(&cloud(10, 1), 0, 0)).contains("samples"));
+    assert!(vae.as_whole().unwrap().decode(&cloud(10, 1), &z).is_err());
+    assert!(err(vae.sample(&cloud(10, 1), &SampleOptions::new(0, 0))).contains("samples"));
     let config = VaeConfig {
         latent: 0,
         ..small()
@@ -168,8 +184,8 @@ fn files_round_trip_and_other_files_are_refused() {
     let loaded = Cvae::load(&path).unwrap();
     let points = cloud(64, 2);
     assert_eq!(
-        vae.sample(&points, 5, 1).unwrap(),
-        loaded.sample(&points, 5, 1).unwrap()
+        vae.sample(&points, &SampleOptions::new(5, 1)).unwrap(),
+        loaded.sample(&points, &SampleOptions::new(5, 1)).unwrap()
     );
     // A field network's file: another format.
     let net = envfield_nets::FieldNet::new(
@@ -199,17 +215,17 @@ fn files_round_trip_and_other_files_are_refused() {
 /// same weights as one that never stopped.
 #[test]
 fn training_resumes_exactly() {
-    let room = generate_room(&RoomConfig::default(), 3).unwrap();
-    let data = vec![room_torsos(
-        &room,
-        &TorsoDataConfig {
-            walks: 1,
-            ..TorsoDataConfig::default()
-        },
-        3,
-    )
-    .unwrap()];
-    assert!(data[0].sources.contains(&TorsoSource::Stand));
+    // Torsos standing 0.9 m above a 5 x 4 m floor of the cloud.
+    let mut rng = envfield_grid::SplitMix64::new(3);
+    let torsos: Vec<[f32; 3]> = (0..200)
+        .map(|_| [5.0 * rng.next_f32(), 4.0 * rng.next_f32(), 0.9])
+        .collect();
+    let data = vec![RoomTorsos {
+        cloud: cloud(256, 3),
+        sources: vec![TorsoSource::Stand; torsos.len()],
+        kinds: vec![Some(PoseKind::Standing); torsos.len()],
+        torsos,
+    }];
     let config = VaeTrainConfig {
         lr: 1e-3,
         steps: 40,
@@ -238,8 +254,14 @@ fn training_resumes_exactly() {
     resumed.run(&data, None, |_| true).unwrap();
     let points = cloud(64, 4);
     assert_eq!(
-        whole.vae().sample(&points, 6, 2).unwrap(),
-        resumed.vae().sample(&points, 6, 2).unwrap()
+        whole
+            .vae()
+            .sample(&points, &SampleOptions::new(6, 2))
+            .unwrap(),
+        resumed
+            .vae()
+            .sample(&points, &SampleOptions::new(6, 2))
+            .unwrap()
     );
     assert!(
         VaeTrainer::new(Cvae::new(small(), 1).unwrap(), whole.config().clone())
@@ -247,418 +269,4 @@ fn training_resumes_exactly() {
             .run(&[], None, |_| true)
             .is_err()
     );
-}
-
-/// A scene with no floor affords nothing: its region is refused with a clear error.
-#[test]
-fn a_scene_with_no_floor_has_no_accessible_region() {
-    // A cube floating 3 m up: no surface to stand or sit on near the samples.
-    let mut mesh = TriangleMesh::cube(1.0);
-    for v in &mut mesh.vertices {
-        v.z += 3.0;
-    }
-    let scene = Scene::from_mesh("cube", &mesh).unwrap();
-    let samples = [[0.0, 0.0, 1.0], [0.3, 0.2, 0.9], [-0.2, 0.1, 1.1]];
-    let config = RegionConfig::default();
-    let kept: Vec<_> = samples
-        .iter()
-        .filter(|&&s| afford(&scene, s, &config).unwrap().kept())
-        .copied()
-        .collect();
-    assert!(kept.is_empty());
-    let e = AccessibleRegion::from_samples(&scene, kept, 0.1)
-        .unwrap_err()
-        .to_string();
-    assert!(e.contains("no floor"), "{e}");
-    assert!(afford(&scene, [f32::NAN, 0.0, 1.0], &config).is_err());
-}
-
-/// In a room, a torso at standing height over open floor is kept and affords standing; one
-/// inside a wall is not kept.
-#[test]
-fn the_filter_keeps_standing_torsos_and_drops_ones_in_walls() {
-    let room = generate_room(&RoomConfig::default(), 5).unwrap();
-    let data = room_torsos(&room, &TorsoDataConfig::default(), 5).unwrap();
-    let config = RegionConfig::default();
-    let standing = data
-        .torsos
-        .iter()
-        .zip(&data.sources)
-        .find(|(_, s)| **s == TorsoSource::Stand)
-        .map(|(t, _)| *t)
-        .unwrap();
-    let a = afford(&room.scene, standing, &config).unwrap();
-    assert!(a.kept() && a.valid.is_some(), "{a:?}");
-    let in_wall = [-0.05, room.size[1] / 2.0, 1.0];
-    assert!(!afford(&room.scene, in_wall, &config).unwrap().kept());
-}
-
-/// A region built by hand: an open 3 x 2 x 1 box of voxels.
-fn box_region(shape: [usize; 3], voxel: f32) -> AccessibleRegion {
-    let frame = VoxelFrame {
-        origin: envfield_scene::nalgebra::Point3::new(0.0, 0.0, 0.0),
-        voxel,
-        shape,
-    };
-    let grid = Grid3::new(shape[0], shape[1], shape[2]).unwrap();
-    AccessibleRegion::new(frame, grid, vec![[0.05, 0.05, 0.05]], 1).unwrap()
-}
-
-/// The exact field of an open box is the straight-line distance (fast marching, first order,
-/// within its known error), in metres; a goal outside the region is refused.
-#[test]
-fn the_exact_field_of_an_open_box_is_the_distance() {
-    let region = box_region([40, 30, 6], 0.1);
-    let field = ExactField3::at_cell(&region, Cell3::new(5, 5, 2)).unwrap();
-    let goal = region.frame.center(Cell3::new(5, 5, 2));
-    for c in [
-        Cell3::new(35, 5, 2),
-        Cell3::new(5, 25, 2),
-        Cell3::new(30, 20, 4),
-    ] {
-        let p = region.frame.center(c);
-        let d = (p - goal).norm();
-        let v = field.value([p.x, p.y, p.z]).unwrap();
-        assert!((v - d).abs() < 0.08 * d + 0.02, "{c:?}: {v} against {d}");
-    }
-    let g = field.gradient([2.0, 0.55, 0.25]).unwrap().unwrap();
-    assert!(g[0] > 0.9 && g[1].abs() < 0.2, "{g:?}");
-    assert!(ExactField3::new(&region, [10.0, 0.0, 0.0]).is_err());
-    assert!(field.value([f32::NAN, 0.0, 0.0]).is_err());
-}
-
-/// Near a wall the exact field stays finite in every accessible voxel (trilinear over the
-/// accessible corners) and infinite in the wall, and matches plain trilinear in the open.
-#[test]
-fn the_exact_field_is_finite_up_to_the_regions_faces() {
-    let mut region = box_region([10, 6, 3], 0.1);
-    let mut grid = region.grid.clone();
-    for y in 0..6 {
-        for z in 0..3 {
-            grid.set_obstacle(Cell3::new(7, y, z), true).unwrap();
-        }
-    }
-    region = AccessibleRegion::new(region.frame, grid, region.samples.clone(), 1).unwrap();
-    let field = ExactField3::at_cell(&region, Cell3::new(1, 3, 1)).unwrap();
-    // x = 0.68 m is in voxel 6 (accessible), between its centre (0.65) and the wall's (0.75).
-    let near_wall = field.value([0.68, 0.35, 0.15]).unwrap();
-    let centre = field.value([0.65, 0.35, 0.15]).unwrap();
-    assert!(
-        near_wall.is_finite() && (near_wall - centre).abs() < 1e-4,
-        "{near_wall} {centre}"
-    );
-    assert!(field.value([0.695, 0.35, 0.15]).unwrap().is_finite());
-    assert!(field.value([0.76, 0.35, 0.15]).unwrap().is_infinite());
-    // In the open, the mean of the corners.
-    let (a, b) = (
-        field.value([0.35, 0.35, 0.15]).unwrap(),
-        field.value([0.45, 0.35, 0.15]).unwrap(),
-    );
-    let mid = field.value([0.40, 0.35, 0.15]).unwrap();
-    assert!((mid - 0.5 * (a + b)).abs() < 1e-4, "{mid} {a} {b}");
-}
-
-/// A short training of the learned field on a small box gets within a few voxels of the exact
-/// field on held-out goals; a network of another lattice is refused.
-#[test]
-fn the_learned_field_approaches_the_exact_one() {
-    let region = box_region([12, 10, 4], 0.1);
-    let config = Field3Config {
-        goals: 48,
-        held_out_goals: 4,
-        steps: 400,
-        goals_per_step: 8,
-        queries_per_goal: 64,
-        ..Field3Config::default()
-    };
-    let (net, report) = envfield_vae::train_field3(&region, &config, None, |_, _, _| {}).unwrap();
-    assert!(report.pairs > 100);
-    assert!(report.median_err_m < 0.15, "{report:?}");
-    let field = LearnedField3::new(&net, &region, Cell3::new(1, 1, 1)).unwrap();
-    let v = field
-        .values(&[[0.15, 0.15, 0.15], [1.05, 0.85, 0.15]])
-        .unwrap();
-    assert!(v[0] < v[1], "{v:?}");
-    let other = box_region([8, 8, 4], 0.1);
-    assert!(LearnedField3::new(&net, &other, Cell3::new(1, 1, 1)).is_err());
-}
-
-/// The local VAE: it learns from neighbourhoods, samples over the whole room at anchors, keeps
-/// its samples near the anchors' neighbourhoods, and refuses the whole-scene APIs.
-#[test]
-fn the_local_vae_trains_samples_over_the_room_and_refuses_whole_scene_calls() {
-    let local = VaeConfig {
-        pointnet: vec![16, 32],
-        latent: 4,
-        hidden: 32,
-        ..VaeConfig::local()
-    };
-    let room = generate_room(&RoomConfig::default(), 3).unwrap();
-    let data = vec![room_torsos(
-        &room,
-        &TorsoDataConfig {
-            walks: 1,
-            cloud_points: 4096,
-            ..TorsoDataConfig::default()
-        },
-        3,
-    )
-    .unwrap()];
-    let config = VaeTrainConfig {
-        lr: 1e-3,
-        steps: 60,
-        scenes_per_step: 2,
-        torsos_per_scene: 16,
-        checkpoint_every: 0,
-        ..VaeTrainConfig::default()
-    };
-    let mut trainer = VaeTrainer::new(Cvae::new(local.clone(), 1).unwrap(), config).unwrap();
-    let mut losses = Vec::new();
-    trainer
-        .run(&data, None, |p| {
-            losses.push(p.recon);
-            true
-        })
-        .unwrap();
-    assert!(
-        losses[50..].iter().sum::<f32>() < losses[..10].iter().sum::<f32>(),
-        "{losses:?}"
-    );
-    let vae = trainer.vae();
-    assert_eq!(vae.cloud_points(), 8192);
-    let samples = vae.sample(&data[0].cloud, 400, 5).unwrap();
-    assert_eq!(
-        samples,
-        vae.sample(&data[0].cloud, 400, 5).unwrap(),
-        "seeded"
-    );
-    // Anchors cover the room: samples spread over both halves of it in x and y.
-    let [w, d] = room.size;
-    for (axis, size) in [(0, w), (1, d)] {
-        let low = samples.iter().filter(|s| s[axis] < size / 2.0).count();
-        assert!(
-            (40..360).contains(&low),
-            "axis {axis}: {low} of 400 in the lower half"
-        );
-    }
-    for call in [
-        vae.scene_feature(&data[0].cloud).map(|_| ()),
-        vae.encode(&data[0].cloud, &[[1.0, 1.0, 1.0]]).map(|_| ()),
-    ] {
-        let e = call.unwrap_err().to_string();
-        assert!(e.contains("neighbourhoods"), "{e}");
-    }
-    assert!(vae.sample(&[], 5, 0).is_err());
-    assert!(vae.sample(&[[0.0, f32::NAN, 0.0]], 5, 0).is_err());
-    // Anchors of one's own: every torso lands near its anchor (the decoder's offsets are
-    // bounded by the neighbourhood), and bad anchors or a whole-scene VAE are refused.
-    let anchors = [[1.0, 1.0], [w - 1.0, d - 1.0]];
-    let near = vae.sample_around(&data[0].cloud, &anchors, 7, 1.0).unwrap();
-    for (t, a) in near.iter().zip(&anchors) {
-        let off = (t[0] - a[0]).hypot(t[1] - a[1]);
-        assert!(off < 1.5, "torso {t:?} is {off} m from its anchor {a:?}");
-    }
-    let e = |r: Result<Vec<[f32; 3]>, VaeError>| r.unwrap_err().to_string();
-    assert!(e(vae.sample_around(&data[0].cloud, &[], 7, 1.0)).contains("anchors"));
-    assert!(e(vae.sample_around(&data[0].cloud, &[[0.0, f32::NAN]], 7, 1.0)).contains("anchor 0"));
-    assert!(e(vae.sample_around(&data[0].cloud, &anchors, 7, 0.0)).contains("temperature"));
-    let global = Cvae::new(small(), 0).unwrap();
-    assert!(e(global.sample_around(&data[0].cloud, &anchors, 7, 1.0)).contains("whole scene"));
-    let bad = VaeConfig {
-        points: 32,
-        ..VaeConfig::local()
-    };
-    assert!(Cvae::new(bad, 0).unwrap_err().to_string().contains("local"));
-}
-
-/// The shipped local VAE loads as a local VAE and, on a room it never saw, puts most of its
-/// kept samples where a pose is supported and collision-free and some within 0.15 m of a
-/// seat's sitting torso (the README's figures are over 20 rooms and 6000 samples).
-#[test]
-fn the_shipped_local_vae_samples_an_unseen_room() {
-    let file =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/vae_local.safetensors");
-    let vae = Cvae::load(&file).unwrap();
-    assert!(vae.config().local.is_some());
-    let room = generate_room(&RoomConfig::default(), 10_003).unwrap();
-    let points: Vec<[f32; 3]> = envfield_scene::sample_surface(&room.scene, vae.cloud_points(), 3)
-        .unwrap()
-        .iter()
-        .map(|p| [p.x, p.y, p.z])
-        .collect();
-    let samples = vae.sample(&points, 1500, 3).unwrap();
-    let q = envfield_vae::region_quality(&room, &samples, &RegionConfig::default()).unwrap();
-    assert!(q.affordable_pct > 60.0, "{q:?}");
-    assert!(q.floor_coverage_pct > 90.0, "{q:?}");
-    assert!(q.seat_coverage_pct > 0.0, "{q:?}");
-}
-
-/// The gated local VAE: its gate and pose-kind heads learn (their cross-entropies fall), its
-/// file keeps them,
-/// it samples as many torsos as asked with the gate on or off, and it refuses, naming the
-/// gate, a scene where the gate passes no anchor, as it does a bad gate configuration and
-/// occupancy queries to a VAE without a gate.
-#[test]
-fn the_gated_vae_learns_its_gate_and_refuses_a_scene_where_nobody_can_be() {
-    let gated = VaeConfig {
-        pointnet: vec![16, 32],
-        latent: 4,
-        hidden: 32,
-        ..VaeConfig::local_gated()
-    };
-    let room = generate_room(&RoomConfig::default(), 4).unwrap();
-    let data = vec![room_torsos(
-        &room,
-        &TorsoDataConfig {
-            walks: 1,
-            cloud_points: 4096,
-            floor_spacing: 0.1,
-            affordable_only: true,
-            ..TorsoDataConfig::default()
-        },
-        4,
-    )
-    .unwrap()];
-    assert!(data[0].kinds.iter().all(Option::is_some));
-    let config = VaeTrainConfig {
-        lr: 1e-3,
-        steps: 80,
-        scenes_per_step: 2,
-        torsos_per_scene: 16,
-        checkpoint_every: 0,
-        ..VaeTrainConfig::default()
-    };
-    let mut trainer =
-        VaeTrainer::new(Cvae::new(gated.clone(), 2).unwrap(), config.clone()).unwrap();
-    let (mut gate, mut kind) = (Vec::new(), Vec::new());
-    trainer
-        .run(&data, None, |p| {
-            gate.push(p.gate);
-            kind.push(p.kind);
-            true
-        })
-        .unwrap();
-    for losses in [&gate, &kind] {
-        assert!(
-            losses[70..].iter().sum::<f32>() < losses[..10].iter().sum::<f32>(),
-            "{losses:?}"
-        );
-    }
-    let vae = trainer.vae();
-    assert!(vae.gated() && vae.has_kinds());
-    // Pose kinds train only on torsos labelled by the pose they afford.
-    let mut unlabelled = data.clone();
-    unlabelled[0].kinds[0] = None;
-    let mut fresh = VaeTrainer::new(Cvae::new(gated.clone(), 2).unwrap(), config.clone()).unwrap();
-    let e = fresh
-        .run(&unlabelled, None, |_| true)
-        .unwrap_err()
-        .to_string();
-    assert!(e.contains("affordable_only"), "{e}");
-    let points = &data[0].cloud;
-    let anchors = [[1.0, 1.0], [2.0, 1.5], [0.5, 3.0]];
-    let p = vae.occupancy(points, &anchors).unwrap();
-    assert_eq!(p.len(), 3);
-    assert!(p.iter().all(|p| (0.0..=1.0).contains(p)), "{p:?}");
-    let path = tmp("gated.safetensors");
-    vae.save(&path).unwrap();
-    let loaded = Cvae::load(&path).unwrap();
-    assert!(loaded.gated());
-    assert_eq!(loaded.occupancy(points, &anchors).unwrap(), p);
-    for gate in [Some(0.5), Some(0.2), None] {
-        let s = vae.sample_gated(points, 300, 5, 1.0, gate).unwrap();
-        assert_eq!(s.len(), 300);
-        assert_eq!(s, vae.sample_gated(points, 300, 5, 1.0, gate).unwrap());
-    }
-    // A gate that passes nothing: the sampler stops and says why.
-    let mut shut = gated.clone();
-    if let Some(l) = shut.local.as_mut() {
-        l.gate.as_mut().unwrap().threshold = 0.999_999;
-    }
-    let e = Cvae::new(shut, 2)
-        .unwrap()
-        .sample(points, 10, 0)
-        .unwrap_err()
-        .to_string();
-    assert!(e.contains("occupancy gate passed 0"), "{e}");
-    // Bad input and bad configurations.
-    let err = |r: Result<Vec<f32>, VaeError>| r.unwrap_err().to_string();
-    assert!(vae
-        .sample_gated(points, 10, 0, 1.0, Some(1.0))
-        .unwrap_err()
-        .to_string()
-        .contains("gate threshold"));
-    assert!(err(vae.occupancy(points, &[])).contains("anchors"));
-    assert!(err(vae.occupancy(points, &[[f32::NAN, 0.0]])).contains("anchor 0"));
-    assert!(err(vae.occupancy(&[], &anchors)).contains("cloud"));
-    let plain = Cvae::new(small(), 0).unwrap();
-    assert!(err(plain.occupancy(points, &anchors)).contains("no occupancy gate"));
-    for (radius, threshold) in [(0.0, 0.5), (0.08, 1.0), (f32::NAN, 0.5)] {
-        let mut bad = gated.clone();
-        if let Some(l) = bad.local.as_mut() {
-            let g = l.gate.as_mut().unwrap();
-            (g.radius, g.threshold) = (radius, threshold);
-        }
-        let e = Cvae::new(bad, 0).unwrap_err().to_string();
-        assert!(e.contains("gate"), "{e}");
-    }
-}
-
-/// The seat grid: every place it gives affords the sitting or lying pose it names, and each
-/// seat whose sitting torso affords a pose has one of its places within 0.15 m.
-#[test]
-fn the_seat_grid_finds_a_place_on_every_seat() {
-    use envfield_affordance::Support;
-    let config = RegionConfig::default();
-    for seed in [5, 6] {
-        let room = generate_room(&RoomConfig::default(), seed).unwrap();
-        let grid = envfield_vae::seat_grid(&room, 0.1).unwrap();
-        assert!(!grid.is_empty());
-        for (t, kind) in &grid {
-            assert!(matches!(kind, Support::Sitting | Support::Lying));
-            let a = afford(&room.scene, *t, &config).unwrap();
-            assert!(a.kept() && a.valid == Some(*kind), "{t:?}: {a:?}");
-        }
-        for s in envfield_vae::seat_torsos(&room).unwrap() {
-            if afford(&room.scene, s, &config).unwrap().valid.is_none() {
-                continue;
-            }
-            let near = grid.iter().map(|(t, _)| {
-                ((t[0] - s[0]).powi(2) + (t[1] - s[1]).powi(2) + (t[2] - s[2]).powi(2)).sqrt()
-            });
-            let d = near.fold(f32::INFINITY, f32::min);
-            assert!(
-                d < 0.15,
-                "room {seed}: seat torso {s:?} is {d} m from the grid"
-            );
-        }
-    }
-    assert!(
-        envfield_vae::seat_grid(&generate_room(&RoomConfig::default(), 5).unwrap(), 0.0)
-            .unwrap_err()
-            .to_string()
-            .contains("spacing")
-    );
-}
-
-/// The shipped gated VAE, on a room it never saw: nearly every kept sample affords a pose, the
-/// standing floor is covered, and so is every seat's sitting torso (the README's figures are
-/// over 20 rooms and 6000 samples each).
-#[test]
-fn the_shipped_gated_vae_samples_an_unseen_room() {
-    let file =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/vae_gated.safetensors");
-    let vae = Cvae::load(&file).unwrap();
-    assert!(vae.gated() && vae.has_kinds());
-    let room = generate_room(&RoomConfig::default(), 10_003).unwrap();
-    let points: Vec<[f32; 3]> = envfield_scene::sample_surface(&room.scene, vae.cloud_points(), 3)
-        .unwrap()
-        .iter()
-        .map(|p| [p.x, p.y, p.z])
-        .collect();
-    let samples = vae.sample(&points, 3000, 3).unwrap();
-    let q = envfield_vae::region_quality(&room, &samples, &RegionConfig::default()).unwrap();
-    assert!(q.affordable_pct > 90.0, "{q:?}");
-    assert!(q.floor_coverage_pct > 95.0, "{q:?}");
-    assert!(q.seat_coverage_pct >= 50.0, "{q:?}");
 }

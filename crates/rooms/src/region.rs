@@ -13,8 +13,8 @@
 //! collisions (the check of `envfield_affordance::check_pose`), is the quality figure: the
 //! filter does not ask for it.
 
-use crate::data::seat_torsos;
-use crate::{Result, VaeError};
+use crate::torsos::seat_torsos;
+use crate::{Result, RoomsError};
 use envfield_affordance::{
     check_pose, lie_down, sit_down, standing_pose, AffordanceConfig, LieConfig, Pose, SitConfig,
     Support,
@@ -61,7 +61,7 @@ impl RegionConfig {
         if ok {
             Ok(())
         } else {
-            Err(VaeError::InvalidConfig(format!(
+            Err(RoomsError::InvalidConfig(format!(
                 "region: torso_radius >= 0, 1 to 360 yaws and a voxel of at least 2 cm (got {self:?})"
             )))
         }
@@ -113,7 +113,7 @@ impl Afford {
 /// What the torso location `p` affords in `scene` (see the module's filter).
 ///
 /// # Errors
-/// [`VaeError::InvalidInput`] for a coordinate that is not finite.
+/// [`RoomsError::InvalidInput`] for a coordinate that is not finite.
 pub fn afford(scene: &Scene, p: [f32; 3], config: &RegionConfig) -> Result<Afford> {
     config.validate()?;
     afford_with(scene, p, config, &Kit::new()?)
@@ -121,7 +121,7 @@ pub fn afford(scene: &Scene, p: [f32; 3], config: &RegionConfig) -> Result<Affor
 
 fn afford_with(scene: &Scene, p: [f32; 3], config: &RegionConfig, kit: &Kit) -> Result<Afford> {
     if !p.iter().all(|v| v.is_finite()) {
-        return Err(VaeError::InvalidInput(format!(
+        return Err(RoomsError::InvalidInput(format!(
             "torso location {p:?} is not finite"
         )));
     }
@@ -178,7 +178,7 @@ pub fn afford_all(
         .enumerate()
         .map(|(i, &p)| {
             afford_with(scene, p, config, &kit).map_err(|e| match e {
-                VaeError::InvalidInput(m) => VaeError::InvalidInput(format!("sample {i}: {m}")),
+                RoomsError::InvalidInput(m) => RoomsError::InvalidInput(format!("sample {i}: {m}")),
                 other => other,
             })
         })
@@ -205,7 +205,7 @@ impl AccessibleRegion {
     /// A region from its parts: `grid`'s free voxels on `frame` are accessible.
     ///
     /// # Errors
-    /// [`VaeError::InvalidInput`] when the grid's shape is not the frame's or no voxel is
+    /// [`RoomsError::InvalidInput`] when the grid's shape is not the frame's or no voxel is
     /// free.
     pub fn new(
         frame: VoxelFrame,
@@ -214,14 +214,14 @@ impl AccessibleRegion {
         components: usize,
     ) -> Result<Self> {
         if grid.shape() != frame.shape {
-            return Err(VaeError::InvalidInput(format!(
+            return Err(RoomsError::InvalidInput(format!(
                 "a region's grid {:?} must have its frame's shape {:?}",
                 grid.shape(),
                 frame.shape
             )));
         }
         if grid.free_count() == 0 {
-            return Err(VaeError::InvalidInput(
+            return Err(RoomsError::InvalidInput(
                 "a region needs an accessible voxel".into(),
             ));
         }
@@ -263,11 +263,11 @@ impl AccessibleRegion {
     /// The region of `kept` samples (already filtered) on a lattice covering `scene`.
     ///
     /// # Errors
-    /// [`VaeError::InvalidInput`] for no samples (a scene with no floor keeps none) or an
+    /// [`RoomsError::InvalidInput`] for no samples (a scene with no floor keeps none) or an
     /// empty scene.
     pub fn from_samples(scene: &Scene, kept: Vec<[f32; 3]>, voxel: f32) -> Result<Self> {
         if kept.is_empty() {
-            return Err(VaeError::InvalidInput(
+            return Err(RoomsError::InvalidInput(
                 "no torso sample affords a pose here: the scene has no floor or seat the \
                  samples reach"
                     .into(),
@@ -275,7 +275,7 @@ impl AccessibleRegion {
         }
         let scene_box = scene
             .aabb()
-            .ok_or_else(|| VaeError::InvalidInput("the scene is empty".into()))?;
+            .ok_or_else(|| RoomsError::InvalidInput("the scene is empty".into()))?;
         // The lattice covers the scene and every kept sample, with a voxel to spare.
         let (mut lo, mut hi) = (scene_box.mins, scene_box.maxs);
         for p in &kept {
@@ -314,52 +314,17 @@ impl AccessibleRegion {
             }
         }
         // The largest 26-connected set.
-        let mut label = vec![usize::MAX; on.len()];
-        let mut sizes = Vec::new();
-        for start in 0..on.len() {
-            if !on[start] || label[start] != usize::MAX {
-                continue;
-            }
-            let id = sizes.len();
-            let mut stack = vec![start];
-            label[start] = id;
-            let mut size = 0usize;
-            while let Some(i) = stack.pop() {
-                size += 1;
-                let (x, y, z) = (i / (ny * nz), (i / nz) % ny, i % nz);
-                for dx in -1isize..=1 {
-                    for dy in -1isize..=1 {
-                        for dz in -1isize..=1 {
-                            let (a, b, c) = (x as isize + dx, y as isize + dy, z as isize + dz);
-                            if a < 0
-                                || b < 0
-                                || c < 0
-                                || a as usize >= nx
-                                || b as usize >= ny
-                                || c as usize >= nz
-                            {
-                                continue;
-                            }
-                            let j = index(Cell3::new(a as usize, b as usize, c as usize));
-                            if on[j] && label[j] == usize::MAX {
-                                label[j] = id;
-                                stack.push(j);
-                            }
-                        }
-                    }
-                }
-            }
-            sizes.push(size);
-        }
-        let largest = (0..sizes.len()).max_by_key(|&k| sizes[k]).unwrap_or(0);
-        let obstacles = label.iter().map(|&l| l != largest).collect();
+        let all = Grid3::from_obstacles(frame.shape, on.iter().map(|&o| !o).collect())?;
+        let components = all.free_components();
+        let largest = components.largest().unwrap_or(0);
+        let obstacles = components.labels.iter().map(|&l| l != largest).collect();
         let grid = Grid3::from_obstacles(frame.shape, obstacles)?;
         if grid.free_count() == 0 {
-            return Err(VaeError::InvalidInput(
+            return Err(RoomsError::InvalidInput(
                 "the kept samples all lie outside the scene's box".into(),
             ));
         }
-        Self::new(frame, grid, kept, sizes.len())
+        Self::new(frame, grid, kept, components.count())
     }
 
     /// Whether `p` (metres) lies in an accessible voxel.
@@ -447,11 +412,11 @@ impl AccessibleRegion {
     /// The voxel of `p` when it is accessible.
     ///
     /// # Errors
-    /// [`VaeError::InvalidInput`] naming `what` for a point outside the region.
+    /// [`RoomsError::InvalidInput`] naming `what` for a point outside the region.
     pub fn cell(&self, p: [f32; 3], what: &str) -> Result<Cell3> {
         match self.frame.cell_of(&Point3::new(p[0], p[1], p[2])) {
             Some(c) if self.grid.is_free(c) => Ok(c),
-            _ => Err(VaeError::InvalidInput(format!(
+            _ => Err(RoomsError::InvalidInput(format!(
                 "{what} {p:?} is outside the accessible region"
             ))),
         }
@@ -504,7 +469,7 @@ pub struct RegionQuality {
 /// Judges `samples` drawn for `room`: the filter's figures, floor coverage and seat coverage.
 ///
 /// # Errors
-/// As [`afford_all`]; [`VaeError::InvalidInput`] for a room with no standing-affordable floor.
+/// As [`afford_all`]; [`RoomsError::InvalidInput`] for a room with no standing-affordable floor.
 pub fn region_quality(
     room: &Room,
     samples: &[[f32; 3]],
@@ -523,7 +488,7 @@ pub fn region_quality(
         .count();
     let floor = crate::standing_floor(&room.scene, [0.0, 0.0, room.size[0], room.size[1]], 0.1)?;
     if floor.is_empty() {
-        return Err(VaeError::InvalidInput(
+        return Err(RoomsError::InvalidInput(
             "the room has no floor a standing pose is supported on".into(),
         ));
     }

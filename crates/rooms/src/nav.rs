@@ -1,10 +1,11 @@
 //! The accessible region and a pose sequence as the free space and the step filters of the 3D
-//! planners in envfield-plan ([`FieldSearch3`](envfield_plan::FieldSearch3), RRT, RRT*, PRM).
+//! planners in envfield-plan ([`FieldSearch3`](envfield_plan::space3::FieldSearch3), RRT, RRT*, PRM).
 
 use crate::AccessibleRegion;
 use envfield_affordance::{check_pose, AffordanceConfig, PoseSequence};
 use envfield_grid::{Cell3, Point3m, SplitMix64};
-use envfield_plan::{PlanError, Space3, StepFilter};
+use envfield_plan::space3::{Space3, StepFilter};
+use envfield_plan::PlanError;
 use envfield_scene::nalgebra::{Point3, Vector3};
 use envfield_scene::Scene;
 

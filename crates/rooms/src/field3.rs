@@ -2,7 +2,7 @@
 //! accessible voxels, in metres) and the learned one (the goal-conditioned network, trained
 //! per scene as in the paper), both behind [`ContinuousField3`].
 
-use crate::{AccessibleRegion, Result, VaeError};
+use crate::{AccessibleRegion, Result, RoomsError};
 use envfield_eikonal::{FastMarching, Order};
 use envfield_grid::{Cell3, ContinuousField3, Field3, Point3, Point3m, SplitMix64};
 use envfield_nets::{
@@ -50,7 +50,7 @@ impl ExactField3 {
     /// The field of `region` for the goal at `goal` (metres).
     ///
     /// # Errors
-    /// [`VaeError::InvalidInput`] for a goal outside the accessible region.
+    /// [`RoomsError::InvalidInput`] for a goal outside the accessible region.
     pub fn new(region: &AccessibleRegion, goal: [f32; 3]) -> Result<Self> {
         let cell = region.cell(goal, "goal")?;
         Self::at_cell(region, cell)
@@ -62,7 +62,7 @@ impl ExactField3 {
     /// As [`ExactField3::new`].
     pub fn at_cell(region: &AccessibleRegion, goal: Cell3) -> Result<Self> {
         if !region.grid.is_free(goal) {
-            return Err(VaeError::InvalidInput(format!(
+            return Err(RoomsError::InvalidInput(format!(
                 "goal voxel {goal:?} is outside the accessible region"
             )));
         }
@@ -195,7 +195,7 @@ fn pick_cells(free: &[Cell3], n: usize, rng: &mut SplitMix64) -> Vec<Cell3> {
 /// 500 steps and at the end, and a run resumes from it when it exists.
 ///
 /// # Errors
-/// [`VaeError::InvalidConfig`] for a bad config; [`VaeError::InvalidInput`] for a region of
+/// [`RoomsError::InvalidConfig`] for a bad config; [`RoomsError::InvalidInput`] for a region of
 /// fewer than two voxels; training errors.
 pub fn train_field3(
     region: &AccessibleRegion,
@@ -204,12 +204,12 @@ pub fn train_field3(
     mut on_step: impl FnMut(u64, u64, f32),
 ) -> Result<(FieldNet, Field3Report)> {
     if config.goals == 0 || config.goals_per_step == 0 || config.queries_per_goal == 0 {
-        return Err(VaeError::InvalidConfig(
+        return Err(RoomsError::InvalidConfig(
             "field3: goals, goals_per_step and queries_per_goal must be at least 1".into(),
         ));
     }
     if !(0.0..1.0).contains(&config.blocked_fraction) {
-        return Err(VaeError::InvalidConfig(format!(
+        return Err(RoomsError::InvalidConfig(format!(
             "field3: blocked_fraction in [0, 1) (got {})",
             config.blocked_fraction
         )));
@@ -232,7 +232,7 @@ pub fn train_field3(
         .map(cell)
         .collect();
     if free.len() < 2 {
-        return Err(VaeError::InvalidInput(format!(
+        return Err(RoomsError::InvalidInput(format!(
             "the accessible region has {} voxel(s): nothing to learn",
             free.len()
         )));
@@ -267,7 +267,7 @@ pub fn train_field3(
         Some(p) => {
             let t = Trainer::resume(p)?;
             if t.net().config() != &model {
-                return Err(VaeError::Checkpoint {
+                return Err(RoomsError::Checkpoint {
                     path: p.to_path_buf(),
                     reason: "a checkpoint of another region or network; remove it to start over"
                         .into(),
@@ -386,13 +386,13 @@ impl<'a> LearnedField3<'a> {
     /// `net` (a goal-conditioned network over `region`'s lattice) for the goal voxel `goal`.
     ///
     /// # Errors
-    /// [`VaeError::InvalidInput`] for a network of another lattice or a goal outside the
+    /// [`RoomsError::InvalidInput`] for a network of another lattice or a goal outside the
     /// region.
     pub fn new(net: &'a FieldNet, region: &AccessibleRegion, goal: Cell3) -> Result<Self> {
         match net.config() {
             ModelConfig::Goal(c) if c.extent == region.frame.shape.to_vec() => {}
             other => {
-                return Err(VaeError::InvalidInput(format!(
+                return Err(RoomsError::InvalidInput(format!(
                     "a 3D field needs a goal-conditioned network over the region's {:?} voxels, \
                      not a {} network{}",
                     region.frame.shape,
@@ -405,7 +405,7 @@ impl<'a> LearnedField3<'a> {
             }
         }
         if !region.grid.is_free(goal) {
-            return Err(VaeError::InvalidInput(format!(
+            return Err(RoomsError::InvalidInput(format!(
                 "goal voxel {goal:?} is outside the accessible region"
             )));
         }

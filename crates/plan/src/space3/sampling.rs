@@ -4,7 +4,7 @@
 //! neighbours come from a k-d tree (`kiddo`), PRM's shortest path from `pathfinding`'s
 //! Dijkstra.
 
-use crate::search3::{distance, Path3};
+use super::{distance, Path3};
 use crate::{PlanError, Result};
 use envfield_grid::{Point3m, SplitMix64};
 use kiddo::{KdTree, SquaredEuclidean};

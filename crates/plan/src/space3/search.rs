@@ -1,5 +1,5 @@
-//! Pose-dependent search on a continuous 3D field (paper section 4.2, "Pose-dependent
-//! trajectory"): from the start, step `s` towards each of the 26 directions of
+//! [`FieldSearch3`]: the pose-dependent search on a continuous 3D field (paper section 4.2,
+//! "Pose-dependent trajectory"): from the start, step `s` towards each of the 26 directions of
 //! `{-1, 0, 1}^3 \ {0}`, normalised so every candidate lies exactly `s` away; ask the field at
 //! all candidates in one batch, keep the ones a [`StepFilter`] allows (the pose of this step
 //! supported and collision-free, or simply inside the accessible region), and move to the
@@ -7,95 +7,12 @@
 //! (greedy best-first, [`FieldSearch3::search`]). [`FieldSearch3::shortcut`] then straightens
 //! the path where the filter allows a straight cut.
 
+use super::{directions26, distance, Path3, StepFilter};
 use crate::{PlanError, Result};
 use envfield_grid::{ContinuousField3, Point3m};
 use serde::{Deserialize, Serialize};
 use std::cmp::Reverse;
 use std::collections::{BinaryHeap, HashSet};
-
-/// Which candidate torso locations a step may move to.
-pub trait StepFilter {
-    /// For step `step` (0 for the first move) from `from`: whether each of `candidates` is
-    /// allowed.
-    ///
-    /// # Errors
-    /// When the check itself fails (a bad point, a failing scene query).
-    fn keep(&self, step: usize, from: Point3m, candidates: &[Point3m]) -> Result<Vec<bool>>;
-}
-
-/// Every candidate is allowed.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct AnyStep;
-
-impl StepFilter for AnyStep {
-    fn keep(&self, _: usize, _: Point3m, candidates: &[Point3m]) -> Result<Vec<bool>> {
-        Ok(vec![true; candidates.len()])
-    }
-}
-
-/// A path in 3D and how it ended.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Path3 {
-    /// The torso locations, start first.
-    pub points: Vec<Point3m>,
-    /// The last point lies within the tolerance of the goal.
-    pub reached: bool,
-    /// Distance from the last point to the goal, metres.
-    pub final_distance: f32,
-    /// The search opened every point its filter allows before reaching the goal or spending
-    /// its budget: no allowed route to the goal exists on its lattice. Only
-    /// [`FieldSearch3::search`] sets it.
-    #[serde(default)]
-    pub exhausted: bool,
-    /// Some steps passed only the looser filter of [`FieldSearch3::search_relaxed`]: the
-    /// strict filter allowed no route within the budget.
-    #[serde(default)]
-    pub relaxed: bool,
-}
-
-impl Path3 {
-    /// A path of `points` judged against `goal` with `tolerance`.
-    pub fn ending(points: Vec<Point3m>, goal: Point3m, tolerance: f32) -> Self {
-        let last = *points.last().unwrap_or(&[f32::INFINITY; 3]);
-        let d = distance(last, goal);
-        Self {
-            points,
-            reached: d <= tolerance,
-            final_distance: d,
-            exhausted: false,
-            relaxed: false,
-        }
-    }
-
-    /// The polyline's length, metres.
-    pub fn length(&self) -> f32 {
-        self.points.windows(2).map(|w| distance(w[0], w[1])).sum()
-    }
-}
-
-/// Euclidean distance.
-pub fn distance(a: Point3m, b: Point3m) -> f32 {
-    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
-}
-
-/// The 26 unit directions of `{-1, 0, 1}^3 \ {0}`.
-pub fn directions26() -> [Point3m; 26] {
-    let mut out = [[0.0; 3]; 26];
-    let mut k = 0;
-    for x in -1i32..=1 {
-        for y in -1i32..=1 {
-            for z in -1i32..=1 {
-                if (x, y, z) == (0, 0, 0) {
-                    continue;
-                }
-                let n = ((x * x + y * y + z * z) as f32).sqrt();
-                out[k] = [x as f32 / n, y as f32 / n, z as f32 / n];
-                k += 1;
-            }
-        }
-    }
-    out
-}
 
 /// The pose-dependent search's settings.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -406,29 +323,9 @@ fn values_or_infinity<F: ContinuousField3 + ?Sized>(field: &F, points: &[Point3m
     }
 }
 
-/// The straight line from `start` to `goal` at `step` metres per point, the goal last: the
-/// no-learning floor of the 3D tables.
-///
-/// # Errors
-/// [`PlanError::Invalid`] for a step that is not positive or a point that is not finite.
-pub fn straight_line(start: Point3m, goal: Point3m, step: f32) -> Result<Vec<Point3m>> {
-    if !(step.is_finite() && step > 0.0 && start.iter().chain(&goal).all(|v| v.is_finite())) {
-        return Err(PlanError::Invalid(format!(
-            "straight line: a positive step and finite ends (got {step}, {start:?}, {goal:?})"
-        )));
-    }
-    let d = distance(start, goal);
-    let n = (d / step).ceil().max(1.0) as usize;
-    Ok((0..=n)
-        .map(|i| {
-            let t = i as f32 / n as f32;
-            std::array::from_fn(|a| start[a] + t * (goal[a] - start[a]))
-        })
-        .collect())
-}
-
 #[cfg(test)]
 mod tests {
+    use super::super::{straight_line, AnyStep};
     use super::*;
 
     /// The distance to a goal point in open space.

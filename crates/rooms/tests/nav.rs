@@ -4,10 +4,10 @@
 //! with affordance keeps every pose valid.
 
 use envfield_affordance::{align_in_scene, resample_path, walk, AlignConfig, WalkConfig};
-use envfield_plan::{rrt, FieldSearch3, SamplingConfig};
+use envfield_plan::space3::{rrt, FieldSearch3, SamplingConfig};
+use envfield_rooms::{afford, AccessibleRegion, ExactField3, PoseFilter, RegionConfig};
 use envfield_scene::nalgebra::{Isometry3, Point3};
 use envfield_scene::{ObjectKind, Primitive, Scene, SceneObject};
-use envfield_vae::{afford, AccessibleRegion, ExactField3, PoseFilter, RegionConfig};
 
 fn scene() -> Scene {
     let mut s = Scene::new();

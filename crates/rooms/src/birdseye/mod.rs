@@ -1,0 +1,93 @@
+//! Several people on one floor, seen from above (paper section 4.1): the bird's-eye protocol
+//! the crowd table and the bird's-eye field's training share. Floor maps of 0.1 m cells padded
+//! to 64 x 64, bodies of 0.25 m, maps changed the way other people change them, each
+//! person's walking sequence aligned to their path and checked in the scene, the tallies of
+//! the crowd table and the pictures of a run.
+
+mod data;
+mod picture;
+mod tally;
+
+pub use data::{changed_map, goal_cell, training_maps, walkable_map};
+pub use picture::crowd_frames;
+pub use tally::CrowdTally;
+
+use crate::Result;
+use envfield_affordance::{
+    align_in_scene, resample_path, AffordanceReport, AlignConfig, PoseSequence,
+};
+use envfield_grid::{Grid2, Point2};
+use envfield_plan::crowd::CrowdRun;
+use envfield_scene::nalgebra::Point3;
+use envfield_scene::{floor_map, FloorMap, FloorMapConfig, Scene};
+
+/// Floor-map cell side, metres.
+pub const RESOLUTION: f32 = 0.1;
+/// Body radius, metres (0.25 m: shoulders about 0.5 m wide).
+pub const BODY: f32 = 0.25;
+/// The map side generated rooms are padded to.
+pub const SIDE: usize = 64;
+
+/// A room's scene, floor map and walkable map (padded to 64 x 64 when it fits).
+#[derive(Clone, Debug)]
+pub struct Floor {
+    /// The scene.
+    pub scene: Scene,
+    /// Its floor map at [`RESOLUTION`].
+    pub map: FloorMap,
+    /// Where a body's centre may stand.
+    pub walkable: Grid2,
+}
+
+impl Floor {
+    /// The floor of `scene` for bodies of `body_radius` metres.
+    ///
+    /// # Errors
+    /// Errors of the floor map (an empty scene, no floor).
+    pub fn new(scene: Scene, body_radius: f32) -> Result<Self> {
+        let map = floor_map(
+            &scene,
+            &FloorMapConfig {
+                resolution: RESOLUTION,
+                ..FloorMapConfig::default()
+            },
+        )?;
+        let fits = map.grid.rows() <= SIDE && map.grid.cols() <= SIDE;
+        let walkable = map.walkable(body_radius, fits.then_some([SIDE, SIDE]))?;
+        Ok(Self {
+            scene,
+            map,
+            walkable,
+        })
+    }
+
+    /// World `(x, y, floor height)` of a map point (cell centres at integer coordinates).
+    pub fn world(&self, p: Point2) -> Point3<f32> {
+        let f = &self.map.frame;
+        Point3::new(
+            f.origin[0] + (p.col + 0.5) * f.resolution,
+            f.origin[1] + (p.row + 0.5) * f.resolution,
+            self.map.floor_height,
+        )
+    }
+
+    /// Person `i`'s walking sequence `gait` aligned to their path in `run`, and each frame's
+    /// support and collision check in the scene.
+    ///
+    /// # Errors
+    /// Errors of the resampling, the alignment and the checks.
+    pub fn aligned_walk(
+        &self,
+        run: &CrowdRun,
+        i: usize,
+        gait: &PoseSequence,
+    ) -> Result<(PoseSequence, Vec<AffordanceReport>)> {
+        let path: Vec<Point3<f32>> = run.path(i).iter().map(|&p| self.world(p)).collect();
+        let trajectory = resample_path(&path, gait.step_length())?;
+        let align = AlignConfig {
+            keep_height: true,
+            ..AlignConfig::default()
+        };
+        Ok(align_in_scene(&self.scene, gait, &trajectory, &align)?)
+    }
+}

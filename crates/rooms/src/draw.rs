@@ -1,0 +1,104 @@
+//! From a VAE to an accessible region: the VAE's cloud of a scene, torso samples drawn as a
+//! VAE draws them or next to another VAE's samples, and the region they give.
+
+use crate::{AccessibleRegion, RegionConfig, Result, RoomsError};
+use envfield_grid::{normals, Point3m};
+use envfield_scene::{sample_surface, Scene};
+use envfield_vae::{Cvae, SampleOptions};
+
+/// The VAE's cloud of a scene: as many surface points as it reads
+/// ([`Cvae::cloud_points`]), seeded.
+///
+/// # Errors
+/// Errors of the surface sampling (an empty scene).
+pub fn vae_cloud(vae: &Cvae, scene: &Scene, seed: u64) -> Result<Vec<[f32; 3]>> {
+    Ok(sample_surface(scene, vae.cloud_points(), seed)?
+        .iter()
+        .map(|p| [p.x, p.y, p.z])
+        .collect())
+}
+
+/// Torso samples of `vae` in `scene` with `options`. With `anchors_from`, a local `vae` draws
+/// next to that VAE's samples (drawn with `options.n` and the seed `options.seed ^ 0xF1F1`)
+/// instead of uniform anchors, each moved by the local VAE's training jitter: anchors where
+/// people are likely keep the decoder on the anchors it learned.
+///
+/// # Errors
+/// [`RoomsError::InvalidInput`] for `anchors_from` with a `vae` that is not local; errors of
+/// the sampling.
+pub fn draw_torsos(
+    vae: &Cvae,
+    scene: &Scene,
+    options: &SampleOptions,
+    anchors_from: Option<&Cvae>,
+) -> Result<Vec<[f32; 3]>> {
+    let cloud = vae_cloud(vae, scene, options.seed)?;
+    let Some(first) = anchors_from else {
+        return Ok(vae.sample(&cloud, options)?);
+    };
+    let local = vae.as_local().ok_or_else(|| {
+        RoomsError::InvalidInput(
+            "anchors from another VAE: this VAE reads the whole scene, not neighbourhoods".into(),
+        )
+    })?;
+    let jitter = vae.config().local.map_or(0.0, |l| l.jitter);
+    let firsts = first.sample(
+        &vae_cloud(first, scene, options.seed)?,
+        &SampleOptions::new(options.n, options.seed ^ 0xF1F1),
+    )?;
+    // Moved as in training: a standard-normal step of `jitter` in x and y.
+    let g = normals(2 * firsts.len(), options.seed ^ 0x7E77 ^ 0x5EED_0F2A);
+    let at: Vec<[f32; 2]> = firsts
+        .iter()
+        .zip(g.chunks_exact(2))
+        .map(|(t, g)| [t[0] + jitter * g[0], t[1] + jitter * g[1]])
+        .collect();
+    Ok(local.sample_around(&cloud, &at, options.seed, options.temperature)?)
+}
+
+/// The accessible region of `scene` from `samples` draws of `vae` (seeded), with the default
+/// filter: the region the room tables plan in.
+///
+/// # Errors
+/// As [`draw_torsos`] and [`AccessibleRegion::from_drawn`].
+pub fn sample_region(
+    vae: &Cvae,
+    scene: &Scene,
+    samples: usize,
+    seed: u64,
+) -> Result<AccessibleRegion> {
+    let drawn = draw_torsos(vae, scene, &SampleOptions::new(samples, seed), None)?;
+    AccessibleRegion::from_drawn(scene, &drawn, &RegionConfig::default())
+}
+
+/// A goal for pictures: the kept sample nearest the region's middle in x-y.
+pub fn middle_goal(region: &AccessibleRegion) -> Point3m {
+    let n = region.samples.len() as f32;
+    let mean = region.samples.iter().fold([0.0f32; 3], |a, s| {
+        [a[0] + s[0] / n, a[1] + s[1] / n, a[2] + s[2] / n]
+    });
+    region
+        .samples
+        .iter()
+        .filter(|s| region.contains(**s))
+        .min_by(|a, b| {
+            let d = |s: &[f32; 3]| (s[0] - mean[0]).powi(2) + (s[1] - mean[1]).powi(2);
+            d(a).total_cmp(&d(b))
+        })
+        .or(region.samples.first())
+        .copied()
+        .unwrap_or([0.0; 3])
+}
+
+/// A fingerprint of the region's voxels (FNV-1a over its shape and accessible voxels), so a
+/// kept field is loaded again only for the very region it was trained on.
+pub fn region_key(region: &AccessibleRegion) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    let shape = region.frame.shape;
+    for v in shape.iter().chain(region.free_indices()) {
+        for b in (*v as u64).to_le_bytes() {
+            h = (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3);
+        }
+    }
+    h
+}

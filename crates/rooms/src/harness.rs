@@ -1,0 +1,480 @@
+//! The room navigation harness (paper Tables 3 and 4): the planners by name, the walking and
+//! sit-down pairs, one run of every planner on a pair with its poses fitted and checked, and
+//! the tables' summary. `room_nav` and the `room_planning` bench both run it.
+
+use crate::{afford, point, sit_on, AccessibleRegion, ExactField3, PoseFilter, RegionConfig};
+use crate::{LearnedField3, Result, RoomsError};
+use envfield_affordance::{
+    resample_path, walk, AffordanceReport, PoseSequence, Support, WalkConfig,
+};
+use envfield_grid::{ContinuousField3, Point3m, SplitMix64};
+use envfield_nets::FieldNet;
+use envfield_plan::space3::{
+    prm, rrt, rrt_star, straight_line, FieldSearch3, Path3, SamplingConfig, StepFilter,
+};
+use envfield_scene::nalgebra::Point3;
+use envfield_scene::{Room, Scene};
+use std::fmt;
+use std::str::FromStr;
+use std::time::Instant;
+
+/// The planners of the room tables, in the tables' order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum PlannerKind {
+    /// Ours: the search under the pose filter on the learned field, the region alone where
+    /// that finds no route within the budget, then straight cuts the pose filter allows.
+    Ours,
+    /// The paper's search alone, on the learned field.
+    OursRaw,
+    /// The search and cuts under the region alone (no affordance), on the learned field.
+    OursNoAff,
+    /// Ours on the exact field.
+    OursExact,
+    /// RRT at the sampling config's budget.
+    Rrt,
+    /// RRT* at the sampling config's budget.
+    RrtStar,
+    /// RRT* at the harness's big budget.
+    RrtStarBig,
+    /// PRM, its roadmap included.
+    Prm,
+    /// The straight line (blind to the region).
+    Line,
+}
+
+impl PlannerKind {
+    /// Every planner, in the tables' order.
+    pub const ALL: [PlannerKind; 9] = [
+        PlannerKind::Ours,
+        PlannerKind::OursRaw,
+        PlannerKind::OursNoAff,
+        PlannerKind::OursExact,
+        PlannerKind::Rrt,
+        PlannerKind::RrtStar,
+        PlannerKind::RrtStarBig,
+        PlannerKind::Prm,
+        PlannerKind::Line,
+    ];
+
+    /// The planner's name in tables, JSON keys and file names.
+    pub fn name(self) -> &'static str {
+        match self {
+            PlannerKind::Ours => "ours",
+            PlannerKind::OursRaw => "ours_raw",
+            PlannerKind::OursNoAff => "ours_noaff",
+            PlannerKind::OursExact => "ours_exact",
+            PlannerKind::Rrt => "rrt",
+            PlannerKind::RrtStar => "rrtstar",
+            PlannerKind::RrtStarBig => "rrtstar_big",
+            PlannerKind::Prm => "prm",
+            PlannerKind::Line => "line",
+        }
+    }
+
+    /// Which field the planner descends, if any.
+    pub fn field(self) -> Option<FieldKind> {
+        match self {
+            PlannerKind::Ours | PlannerKind::OursRaw | PlannerKind::OursNoAff => {
+                Some(FieldKind::Learned)
+            }
+            PlannerKind::OursExact => Some(FieldKind::Exact),
+            _ => None,
+        }
+    }
+
+    /// Whether its path's points are the walk's steps (ours), so its poses are placed on them
+    /// as they are; the others' paths are resampled at the walk's step first.
+    pub fn steps_are_points(self) -> bool {
+        self.field().is_some()
+    }
+
+    /// One path from `start` to `goal`. `field` is the field of [`PlannerKind::field`]
+    /// (ignored by the others).
+    ///
+    /// # Errors
+    /// [`RoomsError::InvalidInput`] when the planner needs a field and gets none; errors of
+    /// the planners (a start or goal outside the region).
+    pub fn plan(
+        self,
+        setup: &PairSetup,
+        field: Option<&dyn ContinuousField3>,
+        start: Point3m,
+        goal: Point3m,
+    ) -> Result<Path3> {
+        let PairSetup {
+            region,
+            poses,
+            search,
+            sampling,
+            big_budget,
+        } = setup;
+        let field = || {
+            field.ok_or_else(|| RoomsError::InvalidInput(format!("planner {self}: needs a field")))
+        };
+        let region = *region;
+        Ok(match self {
+            PlannerKind::Ours => search.search_relaxed(field()?, poses, region, start, goal)?,
+            PlannerKind::OursRaw => search.search(field()?, poses, start, goal)?,
+            PlannerKind::OursNoAff => {
+                let f = region as &dyn StepFilter;
+                let raw = search.search(field()?, f, start, goal)?;
+                search.shortcut(f, &raw, goal)?
+            }
+            PlannerKind::OursExact => {
+                search.search_relaxed(field()?, poses, region, start, goal)?
+            }
+            PlannerKind::Rrt => rrt(region, start, goal, sampling)?,
+            PlannerKind::RrtStar => rrt_star(region, start, goal, sampling)?,
+            PlannerKind::RrtStarBig => rrt_star(
+                region,
+                start,
+                goal,
+                &SamplingConfig {
+                    budget: *big_budget,
+                    ..*sampling
+                },
+            )?,
+            PlannerKind::Prm => prm(region, start, goal, sampling)?,
+            PlannerKind::Line => {
+                Path3::ending(straight_line(start, goal, search.step)?, goal, 0.02)
+            }
+        })
+    }
+}
+
+impl fmt::Display for PlannerKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for PlannerKind {
+    type Err = RoomsError;
+
+    fn from_str(s: &str) -> Result<Self> {
+        PlannerKind::ALL
+            .into_iter()
+            .find(|k| k.name() == s)
+            .ok_or_else(|| {
+                let names: Vec<&str> = PlannerKind::ALL.iter().map(|k| k.name()).collect();
+                RoomsError::InvalidInput(format!(
+                    "unknown planner `{s}` (one of {})",
+                    names.join(", ")
+                ))
+            })
+    }
+}
+
+/// The field a planner descends.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FieldKind {
+    /// The room's learned field ([`LearnedField3`]).
+    Learned,
+    /// The exact field ([`ExactField3`]).
+    Exact,
+}
+
+/// What a pair is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum PairKind {
+    /// Walking between two standing places.
+    Walk,
+    /// Sitting down: from where the sit-down starts in front of a seat to seated.
+    Sit,
+}
+
+impl PairKind {
+    /// The kind's name in tables and JSON keys.
+    pub fn name(self) -> &'static str {
+        match self {
+            PairKind::Walk => "walk",
+            PairKind::Sit => "sit",
+        }
+    }
+}
+
+/// A start, a goal and the pose sequence a body follows between them.
+#[derive(Clone, Debug)]
+pub struct Pair {
+    /// The start's torso location, metres.
+    pub start: Point3m,
+    /// The goal's torso location, metres.
+    pub goal: Point3m,
+    /// The poses: a gait repeated along the path, or a sit-down played once.
+    pub sequence: PoseSequence,
+    /// Whether the sequence repeats (a walk) or plays once (a sit-down).
+    pub repeat: bool,
+    /// What the pair is.
+    pub kind: PairKind,
+}
+
+/// Walking pairs between standing places of the region (kept samples that afford standing)
+/// at least a metre apart along the exact field, `count` of them (fewer when 100 `count`
+/// draws do not find them), then, for a generated `room`, a sit-down pair at every seat whose
+/// start and seated torso both lie in the region. Seeded.
+///
+/// # Errors
+/// [`RoomsError::InvalidInput`] when the region holds fewer than two standing places; errors
+/// of the exact field.
+pub fn pairs(
+    room: Option<&Room>,
+    scene: &Scene,
+    region: &AccessibleRegion,
+    count: usize,
+    seed: u64,
+) -> Result<Vec<Pair>> {
+    let config = RegionConfig::default();
+    let standing: Vec<Point3m> = region
+        .samples
+        .iter()
+        .copied()
+        .filter(|&s| region.contains(s))
+        .filter(|&s| afford(scene, s, &config).is_ok_and(|a| a.valid == Some(Support::Standing)))
+        .collect();
+    if standing.len() < 2 {
+        return Err(RoomsError::InvalidInput(
+            "fewer than two standing places in the accessible region".into(),
+        ));
+    }
+    let gait = walk(&WalkConfig::default(), seed)?;
+    let mut rng = SplitMix64::new(seed ^ 0x9A1B);
+    let mut out = Vec::new();
+    let mut tries = 0;
+    while out
+        .iter()
+        .filter(|p: &&Pair| p.kind == PairKind::Walk)
+        .count()
+        < count
+        && tries < 100 * count
+    {
+        tries += 1;
+        let (a, b) = (
+            standing[rng.below(standing.len())],
+            standing[rng.below(standing.len())],
+        );
+        let exact = ExactField3::new(region, b)?;
+        let d = exact.value(a)?;
+        if d.is_finite() && d >= 1.0 {
+            out.push(Pair {
+                start: a,
+                goal: b,
+                sequence: gait.clone(),
+                repeat: true,
+                kind: PairKind::Walk,
+            });
+        }
+    }
+    if let Some(room) = room {
+        for f in &room.furniture {
+            if let Some(seq) = sit_on(f)? {
+                let (Some(first), Some(last)) = (seq.frames.first(), seq.frames.last()) else {
+                    continue;
+                };
+                let (t0, t1) = (first.torso(), last.torso());
+                let (s, g) = ([t0.x, t0.y, t0.z], [t1.x, t1.y, t1.z]);
+                if region.contains(s) && region.contains(g) {
+                    out.push(Pair {
+                        start: s,
+                        goal: g,
+                        sequence: seq,
+                        repeat: false,
+                        kind: PairKind::Sit,
+                    });
+                }
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// The shares of a path's poses that are supported, collision-free and both, in percent.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PoseShares {
+    /// Supported.
+    pub support: f64,
+    /// Collision-free.
+    pub free: f64,
+    /// Supported and collision-free.
+    pub valid: f64,
+}
+
+/// The poses of the pair's sequence along `path` (resampled at the sequence's step when
+/// `resample`), placed as the search places them ([`PoseFilter::poses_along`]): their shares
+/// and the poses.
+///
+/// # Errors
+/// Errors of the resampling and of the checks (an empty path).
+pub fn fit(
+    filter: &PoseFilter,
+    path: &[Point3m],
+    resample: bool,
+) -> Result<(PoseShares, PoseSequence)> {
+    let step = filter.sequence.step_length().max(1e-3);
+    let traj: Vec<Point3m> = if resample && path.len() > 1 {
+        let pts: Vec<Point3<f32>> = path.iter().map(|&p| point(p)).collect();
+        resample_path(&pts, step)?
+            .iter()
+            .map(|p| [p.x, p.y, p.z])
+            .collect()
+    } else {
+        path.to_vec()
+    };
+    let (poses, reports) = filter.poses_along(&traj)?;
+    let n = reports.len().max(1) as f64;
+    let share = |f: &dyn Fn(&AffordanceReport) -> bool| {
+        100.0 * reports.iter().filter(|r| f(r)).count() as f64 / n
+    };
+    Ok((
+        PoseShares {
+            support: share(&|r| r.supported),
+            free: share(&|r| r.collision_free),
+            valid: share(&|r| r.valid()),
+        },
+        poses,
+    ))
+}
+
+/// One planner's result on one pair.
+#[derive(Clone, Debug, Default)]
+pub struct Outcome {
+    /// The path ends within 0.02 m of the goal.
+    pub reached: bool,
+    /// The search opened every allowed point: no allowed route on its lattice (ours only).
+    pub no_route: bool,
+    /// The pose filter allowed no route in the budget; ours took the region's (ours only).
+    pub relaxed: bool,
+    /// Distance from the path's end to the goal, metres.
+    pub dist_m: f64,
+    /// Seconds the planner took (the fields it descends were made before).
+    pub seconds: f64,
+    /// Path length over the exact field's distance, for a path that reached (NaN otherwise).
+    pub path_ratio: f64,
+    /// The shares of its fitted poses.
+    pub poses: PoseShares,
+}
+
+/// One planner's run on one pair: its outcome, path and fitted poses.
+#[derive(Clone, Debug)]
+pub struct Run {
+    /// The planner.
+    pub planner: PlannerKind,
+    /// How it did.
+    pub outcome: Outcome,
+    /// Its path's torso locations.
+    pub path: Vec<Point3m>,
+    /// The pair's poses fitted to the path.
+    pub poses: PoseSequence,
+}
+
+/// What every planner shares on one pair: the region, the pose filter, the search's and the
+/// samplers' settings.
+pub struct PairSetup<'a> {
+    /// The free space.
+    pub region: &'a AccessibleRegion,
+    /// The pair's pose filter.
+    pub poses: PoseFilter<'a>,
+    /// Ours' search.
+    pub search: FieldSearch3,
+    /// RRT's, RRT*'s and PRM's settings.
+    pub sampling: SamplingConfig,
+    /// RRT*'s second budget.
+    pub big_budget: usize,
+}
+
+impl<'a> PairSetup<'a> {
+    /// The setup of `pair` in the room: ours' budget is `budget` expansions per step of the
+    /// `shortest` walk (metres) plus 200, the samplers step at the walk's step (at least
+    /// 5 cm), seeded by `seed`.
+    pub fn new(
+        scene: &'a Scene,
+        region: &'a AccessibleRegion,
+        pair: &'a Pair,
+        shortest: f64,
+        budget: f64,
+        big_budget: usize,
+        seed: u64,
+    ) -> Self {
+        let step = pair.sequence.step_length();
+        Self {
+            region,
+            poses: PoseFilter {
+                scene,
+                region,
+                sequence: &pair.sequence,
+                repeat: pair.repeat,
+                // A walk faces where it goes; a sit-down keeps the heading made for its seat.
+                face_the_move: pair.repeat,
+                affordance: Default::default(),
+            },
+            search: FieldSearch3 {
+                step,
+                tolerance: 0.02,
+                // A search that has not arrived by then is lost in a pocket the poses cannot
+                // leave, and ours falls back to the region alone.
+                max_steps: (budget * shortest.max(0.5) / step as f64) as usize + 200,
+            },
+            sampling: SamplingConfig {
+                step: step.max(0.05),
+                seed,
+                ..SamplingConfig::default()
+            },
+            big_budget,
+        }
+    }
+}
+
+/// Runs every planner of `planners` on one pair, each timed on its own, its poses fitted and
+/// checked. `budget` is ours' expansions per step of the shortest walk.
+///
+/// # Errors
+/// [`RoomsError::InvalidInput`] for a start or goal outside the region; errors of the planners
+/// and fields.
+pub fn run_pair(
+    scene: &Scene,
+    region: &AccessibleRegion,
+    net: &FieldNet,
+    pair: &Pair,
+    planners: &[PlannerKind],
+    big_budget: usize,
+    budget: f64,
+    seed: u64,
+) -> Result<Vec<Run>> {
+    let goal_cell = region.cell(pair.goal, "goal")?;
+    region.cell(pair.start, "start")?;
+    let exact = ExactField3::at_cell(region, goal_cell)?;
+    let shortest = exact.value(pair.start)? as f64;
+    let learned = LearnedField3::new(net, region, goal_cell)?;
+    let setup = PairSetup::new(scene, region, pair, shortest, budget, big_budget, seed);
+    let mut out = Vec::with_capacity(planners.len());
+    for &planner in planners {
+        let field: Option<&dyn ContinuousField3> = match planner.field() {
+            Some(FieldKind::Learned) => Some(&learned),
+            Some(FieldKind::Exact) => Some(&exact),
+            None => None,
+        };
+        let t = Instant::now();
+        let path = planner.plan(&setup, field, pair.start, pair.goal)?;
+        let seconds = t.elapsed().as_secs_f64();
+        let (poses, aligned) = fit(&setup.poses, &path.points, !planner.steps_are_points())?;
+        let outcome = Outcome {
+            reached: path.reached,
+            no_route: path.exhausted,
+            relaxed: path.relaxed,
+            dist_m: path.final_distance as f64,
+            seconds,
+            path_ratio: if path.reached && shortest > 0.0 {
+                path.length() as f64 / shortest
+            } else {
+                f64::NAN
+            },
+            poses,
+        };
+        out.push(Run {
+            planner,
+            outcome,
+            path: path.points,
+            poses: aligned,
+        });
+    }
+    Ok(out)
+}

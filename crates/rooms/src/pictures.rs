@@ -1,0 +1,205 @@
+//! Pictures of rooms: a top view of the accessible region with paths, a ray-cast view of the
+//! room from above one wall with paths and poses, and a top view of a 3D field.
+
+use crate::harness::PlannerKind;
+use crate::{point, AccessibleRegion, Result, RoomsError};
+use envfield_affordance::{Joint, Pose};
+use envfield_grid::{Canvas, Cell3, ContinuousField3, Field2, HeatMapStyle, Point3m};
+use envfield_scene::nalgebra::{Point3, Vector3};
+use envfield_scene::{ObjectKind, Scene};
+use rayon::prelude::*;
+use std::path::Path;
+
+/// Each planner's colour in the pictures.
+pub fn planner_colour(planner: PlannerKind) -> [u8; 3] {
+    match planner {
+        PlannerKind::Ours => [220, 30, 30],
+        PlannerKind::OursRaw => [140, 20, 20],
+        PlannerKind::OursNoAff => [250, 150, 30],
+        PlannerKind::OursExact => [30, 160, 60],
+        PlannerKind::Rrt => [40, 90, 220],
+        PlannerKind::RrtStar => [130, 60, 200],
+        PlannerKind::RrtStarBig => [200, 80, 200],
+        PlannerKind::Prm => [20, 170, 190],
+        PlannerKind::Line => [90, 90, 90],
+    }
+}
+
+/// A top view, 6 pixels a voxel: accessible columns light, the rest dark, every planner's
+/// path in its colour, the first path's start green and goal magenta.
+pub fn top_view(region: &AccessibleRegion, paths: &[(PlannerKind, Vec<Point3m>)]) -> Canvas {
+    let [nx, ny, nz] = region.frame.shape;
+    let s = 6u32;
+    let mut img = Canvas::new(nx as u32 * s, ny as u32 * s, [40, 40, 48]);
+    for x in 0..nx {
+        for y in 0..ny {
+            if (0..nz).any(|z| region.grid.is_free(Cell3::new(x, y, z))) {
+                let (px, py) = (x as i64 * s as i64, (ny - 1 - y) as i64 * s as i64);
+                img.fill(px, py, s, s, [225, 232, 220]);
+            }
+        }
+    }
+    let to_px = |p: Point3m| {
+        let x = (p[0] - region.frame.origin.x) / region.frame.voxel * s as f32;
+        let y =
+            (ny as f32 * s as f32) - (p[1] - region.frame.origin.y) / region.frame.voxel * s as f32;
+        (x, y)
+    };
+    for (planner, pts) in paths {
+        let c = planner_colour(*planner);
+        for w in pts.windows(2) {
+            img.segment(to_px(w[0]), to_px(w[1]), 1, c);
+        }
+    }
+    if let Some((_, pts)) = paths.first() {
+        if let (Some(&a), Some(&b)) = (pts.first(), pts.last()) {
+            let (a, b) = (to_px(a), to_px(b));
+            img.dot(a.0, a.1, 4, [30, 200, 30]);
+            img.dot(b.0, b.1, 4, [220, 30, 220]);
+        }
+    }
+    img
+}
+
+/// The colour of a surface of `kind` in [`room_view`].
+fn surface_colour(kind: ObjectKind) -> [f32; 3] {
+    match kind {
+        ObjectKind::Floor => [0.78, 0.74, 0.68],
+        ObjectKind::Wall => [0.86, 0.86, 0.88],
+        ObjectKind::Bed => [0.45, 0.55, 0.75],
+        ObjectKind::Sofa => [0.65, 0.40, 0.35],
+        ObjectKind::Chair => [0.55, 0.45, 0.30],
+        _ => [0.60, 0.52, 0.42],
+    }
+}
+
+/// The room seen from above and behind its near (low y) wall, 640 x 440 pixels: each pixel
+/// one ray cast with the scene's own ray queries, surfaces shaded by a light from above and
+/// coloured by what they are; every planner's path and the skeletons of `poses` drawn where
+/// the room does not hide them.
+///
+/// # Errors
+/// [`RoomsError::InvalidInput`] for an empty scene.
+pub fn room_view(
+    scene: &Scene,
+    paths: &[(PlannerKind, Vec<Point3m>)],
+    poses: &[Pose],
+) -> Result<Canvas> {
+    let aabb = scene
+        .aabb()
+        .ok_or_else(|| RoomsError::InvalidInput("the scene is empty".into()))?;
+    let (lo, hi) = (aabb.mins, aabb.maxs);
+    let centre = Point3::new((lo.x + hi.x) / 2.0, (lo.y + hi.y) / 2.0 + 0.3, 0.3);
+    // Above and behind the near wall, high enough to see over it into the room.
+    let eye = Point3::new(centre.x, lo.y - 0.8, hi.z + 3.5);
+    let forward = (centre - eye).normalize();
+    let right = forward.cross(&Vector3::z()).normalize();
+    let up = right.cross(&forward);
+    let (w, h) = (640usize, 440usize);
+    let focal = 0.75 * w as f32;
+    let ray = |px: f32, py: f32| {
+        (forward + right * ((px - w as f32 / 2.0) / focal) - up * ((py - h as f32 / 2.0) / focal))
+            .normalize()
+    };
+    let light = Vector3::new(0.3, -0.4, 1.0).normalize();
+    let hits: Vec<(f32, [u8; 3])> = (0..w * h)
+        .into_par_iter()
+        .map(|i| {
+            let d = ray((i % w) as f32 + 0.5, (i / w) as f32 + 0.5);
+            match scene.cast_ray(&eye, &d, 50.0).ok().flatten() {
+                Some(hit) => {
+                    let base = surface_colour(scene.objects()[hit.object].kind);
+                    let shade = 0.35 + 0.65 * hit.normal.dot(&light).abs();
+                    (
+                        hit.distance,
+                        base.map(|c| (255.0 * c * shade).min(255.0) as u8),
+                    )
+                }
+                None => (f32::INFINITY, [30, 30, 36]),
+            }
+        })
+        .collect();
+    let mut img = Canvas::new(w as u32, h as u32, [0, 0, 0]);
+    for (i, (_, c)) in hits.iter().enumerate() {
+        img.put((i % w) as i64, (i / w) as i64, *c);
+    }
+    // A point's pixel and depth along its ray, when in front of the camera.
+    let project = |p: Point3<f32>| -> Option<(f32, f32, f32)> {
+        let v = p - eye;
+        let z = v.dot(&forward);
+        (z > 0.05).then(|| {
+            (
+                w as f32 / 2.0 + focal * v.dot(&right) / z,
+                h as f32 / 2.0 - focal * v.dot(&up) / z,
+                v.norm(),
+            )
+        })
+    };
+    // A segment as 41 points, each a 2x2 square where nothing nearer hides it.
+    let segment = |img: &mut Canvas, a: Point3<f32>, b: Point3<f32>, c: [u8; 3]| {
+        let n = 40;
+        for k in 0..=n {
+            let p = a + (b - a) * (k as f32 / n as f32);
+            let Some((x, y, depth)) = project(p) else {
+                continue;
+            };
+            let (xi, yi) = (x as i64, y as i64);
+            if xi < 0 || yi < 0 || xi >= w as i64 || yi >= h as i64 {
+                continue;
+            }
+            if depth <= hits[yi as usize * w + xi as usize].0 + 0.05 {
+                for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                    let (px, py) = ((xi + dx).min(w as i64 - 1), (yi + dy).min(h as i64 - 1));
+                    img.put(px, py, c);
+                }
+            }
+        }
+    };
+    for (planner, pts) in paths {
+        let c = planner_colour(*planner);
+        for pair in pts.windows(2) {
+            segment(&mut img, point(pair[0]), point(pair[1]), c);
+        }
+    }
+    for pose in poses {
+        for j in Joint::ALL {
+            if let Some(parent) = j.parent() {
+                segment(&mut img, pose.joint(j), pose.joint(parent), [20, 20, 20]);
+            }
+        }
+    }
+    Ok(img)
+}
+
+/// A top view of a 3D field, 6 pixels a voxel, as a heat map: each column's value at its
+/// highest accessible voxel.
+///
+/// # Errors
+/// Errors of the field's queries and of the file.
+pub fn write_field_view(
+    region: &AccessibleRegion,
+    field: &dyn ContinuousField3,
+    path: impl AsRef<Path>,
+) -> Result<()> {
+    let [nx, ny, nz] = region.frame.shape;
+    let mut values = vec![f32::INFINITY; nx * ny];
+    for x in 0..nx {
+        for y in 0..ny {
+            if let Some(z) = (0..nz)
+                .rev()
+                .find(|&z| region.grid.is_free(Cell3::new(x, y, z)))
+            {
+                let c = region.frame.center(Cell3::new(x, y, z));
+                values[(ny - 1 - y) * nx + x] = field.value([c.x, c.y, c.z])?;
+            }
+        }
+    }
+    Field2::new(ny, nx, values)?.write_png(
+        path,
+        &HeatMapStyle {
+            scale: 6,
+            ..HeatMapStyle::default()
+        },
+    )?;
+    Ok(())
+}
