@@ -24,8 +24,8 @@
 
 use anyhow::{bail, Context, Result};
 use clap::Parser;
-use envfield::grid::{write_atomic, Grid2, Maze, MoveRule, Neighbourhood2};
-use envfield::mazes::{GeneratorKind, MazeGenerator};
+use envfield::grid::{write_atomic, MoveRule};
+use envfield::mazes::{suite_sets, MazeSet};
 use envfield::models::ModelSource;
 use envfield::nets::{FieldNet, NetsError};
 use envfield::plan::{evaluate, EvalConfig, FieldDescent, PlannerKind, PlannerOptions, Summary};
@@ -57,139 +57,21 @@ struct Args {
     only: Option<Vec<String>>,
 }
 
-/// One row of the table: a set of mazes and the rule they are walked by.
-struct Set {
-    label: String,
-    rule: MoveRule,
-    mazes: Vec<Maze>,
-}
-
 fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
 }
 
-/// The `rows x cols` window of `maze` at the top-left corner (start and goal dropped).
-fn crop(maze: &Maze, rows: usize, cols: usize) -> Result<Maze> {
-    let g = &maze.grid;
-    let obstacles = (0..rows)
-        .flat_map(|r| (0..cols).map(move |c| (r, c)))
-        .map(|(r, c)| g.obstacles()[r * g.cols() + c])
-        .collect();
-    Ok(Maze {
-        grid: Grid2::from_obstacles(rows, cols, obstacles)?,
-        start: None,
-        goal: None,
-    })
-}
-
-/// `maze` without its outermost rows and columns (start and goal kept when inside).
-fn strip_border(maze: &Maze) -> Result<Maze> {
-    let g = &maze.grid;
-    let (rows, cols) = (g.rows() - 2, g.cols() - 2);
-    let obstacles = (0..rows)
-        .flat_map(|r| (0..cols).map(move |c| (r, c)))
-        .map(|(r, c)| g.obstacles()[(r + 1) * g.cols() + c + 1])
-        .collect();
-    let inside = |p: Option<envfield::grid::Cell2>| {
-        p.filter(|p| (1..=rows).contains(&p.row) && (1..=cols).contains(&p.col))
-            .map(|p| envfield::grid::Cell2::new(p.row - 1, p.col - 1))
-    };
-    let (start, goal) = (inside(maze.start), inside(maze.goal));
-    let both = start.is_some() && goal.is_some();
-    Ok(Maze {
-        grid: Grid2::from_obstacles(rows, cols, obstacles)?,
-        start: start.filter(|_| both),
-        goal: goal.filter(|_| both),
-    })
-}
-
-fn sets(args: &Args) -> Result<Vec<Set>> {
-    let generated = |kind: GeneratorKind, size: usize| -> Result<Vec<Maze>> {
-        Ok(MazeGenerator::new(kind, size)?.generate_many(args.count, args.seed)?)
-    };
-    let mut out = Vec::new();
-    for (kind, rule, sizes) in [
-        (
-            GeneratorKind::Gridworld,
-            MoveRule::Vin,
-            &[8, 16, 28, 48, 64][..],
-        ),
-        (
-            GeneratorKind::Crossings,
-            MoveRule::Strict,
-            &[8, 16, 28, 48, 64],
-        ),
-        (GeneratorKind::Rooms, MoveRule::Strict, &[8, 16, 28, 48, 64]),
-        (GeneratorKind::Perfect, MoveRule::Strict, &[21, 41, 63]),
-    ] {
-        for &size in sizes {
-            out.push(Set {
-                label: format!("{kind} {size}x{size}"),
-                rule,
-                mazes: generated(kind, size)?,
-            });
-        }
-    }
-    // Any frame: open edges and non-square mazes.
-    let no_border = |kind, size| -> Result<Vec<Maze>> {
-        generated(kind, size)?.iter().map(strip_border).collect()
-    };
-    let window = |kind, size, rows, cols| -> Result<Vec<Maze>> {
-        generated(kind, size)?
-            .iter()
-            .map(|m| crop(m, rows, cols))
-            .collect()
-    };
-    out.push(Set {
-        label: "perfect 41x41, border removed (39x39)".into(),
-        rule: MoveRule::Strict,
-        mazes: no_border(GeneratorKind::Perfect, 41)?,
-    });
-    out.push(Set {
-        label: "rooms 16x40 (window of 40x40)".into(),
-        rule: MoveRule::Strict,
-        mazes: window(GeneratorKind::Rooms, 40, 16, 40)?,
-    });
-    out.push(Set {
-        label: "gridworld 16x40 (window of 40x40)".into(),
-        rule: MoveRule::Vin,
-        mazes: window(GeneratorKind::Gridworld, 40, 16, 40)?,
-    });
-    let vin_dir = root().join("../shared/data/vin");
-    for size in [8, 16, 28] {
-        let file = vin_dir.join(format!("vin_test_{size}.txt"));
-        if file.is_file() {
-            let mazes = envfield::grid::read_mazes(&file)?;
-            if size == 16 {
-                out.push(Set {
-                    label: "VIN test 16, border removed (14x14)".into(),
-                    rule: MoveRule::Vin,
-                    mazes: mazes.iter().map(strip_border).collect::<Result<_>>()?,
-                });
-            }
-            out.push(Set {
-                label: format!("VIN test {size}x{size}"),
-                rule: MoveRule::Vin,
-                mazes,
-            });
-        }
-    }
-    let mut minigrid: Vec<PathBuf> = std::fs::read_dir(root().join("data/minigrid"))
-        .context("reading data/minigrid (scripts/export_minigrid.py writes it)")?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|x| x == "txt"))
-        .collect();
-    minigrid.sort();
-    for file in minigrid {
-        let name = file.file_stem().unwrap_or_default().to_string_lossy();
-        let mazes = envfield::grid::read_mazes(&file)?;
-        let (r, c) = (mazes[0].grid.rows(), mazes[0].grid.cols());
-        out.push(Set {
-            label: format!("Minigrid {name} {r}x{c}"),
-            rule: MoveRule::Strict,
-            mazes,
-        });
-    }
+/// The suite's sets, VIN's when `../shared/data/vin/` is there, those `--only` names.
+fn sets(args: &Args) -> Result<Vec<MazeSet>> {
+    let vin = root().join("../shared/data/vin");
+    let minigrid = root().join("data/minigrid");
+    let mut out = suite_sets(
+        args.count,
+        args.seed,
+        Some(vin.as_path()).filter(|d| d.is_dir()),
+        Some(minigrid.as_path()),
+    )
+    .context("the suite's sets (data/minigrid comes from scripts/export_minigrid.py)")?;
     if let Some(words) = &args.only {
         out.retain(|s| {
             words
@@ -202,28 +84,12 @@ fn sets(args: &Args) -> Result<Vec<Set>> {
 
 /// The mean, least and greatest learned cost of the legal orthogonal and diagonal moves of
 /// every set's first maze.
-fn cost_summary(net: &FieldNet, sets: &[Set]) -> Result<serde_json::Value> {
+fn cost_summary(net: &FieldNet, sets: &[MazeSet]) -> Result<serde_json::Value> {
     let (mut orth, mut diag) = (Vec::new(), Vec::new());
     for set in sets {
-        let grid = &set.mazes[0].grid;
-        let costs = net.move_costs(grid)?;
-        for cell in grid.free_cells() {
-            let i = cell.row * grid.cols() + cell.col;
-            for (next, _) in grid.neighbours(cell, Neighbourhood2::Eight(set.rule)) {
-                let (dr, dc) = (
-                    next.row as isize - cell.row as isize,
-                    next.col as isize - cell.col as isize,
-                );
-                let k = envfield::grid::DIRECTIONS_8
-                    .iter()
-                    .position(|&d| d == (dr, dc))
-                    .expect("a neighbour is one of the 8 moves");
-                match dr == 0 || dc == 0 {
-                    true => orth.push(costs[i][k]),
-                    false => diag.push(costs[i][k]),
-                }
-            }
-        }
+        let (o, d) = net.legal_move_costs(&set.mazes[0].grid, set.rule)?;
+        orth.extend(o);
+        diag.extend(d);
     }
     let stats = |v: &[f32]| {
         let mean = v.iter().map(|&x| x as f64).sum::<f64>() / v.len().max(1) as f64;

@@ -26,6 +26,48 @@ impl Maze {
         }
     }
 
+    /// The `rows x cols` window of the maze whose top-left cell is `(row, col)`; its start and
+    /// goal are kept when both lie inside the window (moved into its frame), dropped together
+    /// otherwise.
+    ///
+    /// # Errors
+    /// [`GridError::Invalid`](crate::GridError) for an empty window or one that does not fit
+    /// in the maze.
+    pub fn window(&self, row: usize, col: usize, rows: usize, cols: usize) -> Result<Self> {
+        let g = &self.grid;
+        if rows == 0 || cols == 0 || row + rows > g.rows() || col + cols > g.cols() {
+            return Err(crate::GridError::Invalid(format!(
+                "a {rows}x{cols} window at ({row}, {col}) does not fit in a {}x{} maze",
+                g.rows(),
+                g.cols()
+            )));
+        }
+        let obstacles = (0..rows)
+            .flat_map(|r| (0..cols).map(move |c| (r, c)))
+            .map(|(r, c)| g.obstacles()[(r + row) * g.cols() + c + col])
+            .collect();
+        let inside = |p: Option<Cell2>| {
+            p.filter(|p| (row..row + rows).contains(&p.row) && (col..col + cols).contains(&p.col))
+                .map(|p| Cell2::new(p.row - row, p.col - col))
+        };
+        let (start, goal) = (inside(self.start), inside(self.goal));
+        let both = start.is_some() && goal.is_some();
+        Ok(Self {
+            grid: Grid2::from_obstacles(rows, cols, obstacles)?,
+            start: start.filter(|_| both),
+            goal: goal.filter(|_| both),
+        })
+    }
+
+    /// The maze without its outermost rows and columns ([`Maze::window`] one cell in).
+    ///
+    /// # Errors
+    /// As [`Maze::window`], for a maze under 3 cells a side.
+    pub fn without_border(&self) -> Result<Self> {
+        let (rows, cols) = (self.grid.rows(), self.grid.cols());
+        self.window(1, 1, rows.saturating_sub(2), cols.saturating_sub(2))
+    }
+
     /// Parses exactly one maze.
     ///
     /// # Errors

@@ -24,8 +24,10 @@ mod dataset;
 mod error;
 mod generators;
 mod pairs;
+mod suite;
 
 pub use dataset::{target_field, Dataset, DatasetConfig, Sample, TargetKind};
 pub use error::{MazeError, Result};
 pub use generators::{GeneratorKind, Gridworld, MazeGenerator};
 pub use pairs::{evaluation_pairs, Pair};
+pub use suite::{suite_sets, MazeSet};

@@ -41,6 +41,7 @@ pub mod birdseye;
 mod draw;
 mod error;
 mod field3;
+mod field3_train;
 pub mod harness;
 mod nav;
 pub mod pictures;
@@ -50,7 +51,8 @@ mod torsos;
 
 pub use draw::{draw_torsos, middle_goal, region_key, sample_region, vae_cloud};
 pub use error::{Result, RoomsError};
-pub use field3::{train_field3, ExactField3, Field3Config, Field3Report, LearnedField3};
+pub use field3::{ExactField3, LearnedField3};
+pub use field3_train::{train_field3, Field3Config, Field3Report};
 pub use nav::{offset, point, PoseFilter};
 pub use region::{
     afford, afford_all, covered_pct, region_quality, uniform_in_room, AccessibleRegion, Afford,
