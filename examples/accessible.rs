@@ -20,7 +20,7 @@ use anyhow::{bail, Context, Result};
 use clap::Parser;
 use envfield::rooms::pictures::write_field_view;
 use envfield::rooms::{
-    afford_all, draw_torsos, middle_goal, region_quality, train_field3, uniform_in_room,
+    draw_torsos, drawn_summary, middle_goal, region_quality, train_field3, uniform_in_room,
     AccessibleRegion, ExactField3, Field3Config, Field3Report, LearnedField3, RegionConfig,
     RegionQuality,
 };
@@ -196,25 +196,10 @@ fn one(args: &Args, vae: &Cvae) -> Result<()> {
         write_field_view(&region, &field, args.out.join("field_learned.png"))?;
         Some(report)
     };
-    // How high the drawn samples are, in bands of 0.1 m (before the filter).
-    let mut heights = std::collections::BTreeMap::<i32, usize>::new();
-    for s in &samples {
-        *heights.entry((s[2] * 10.0).floor() as i32).or_default() += 1;
-    }
-    let heights: serde_json::Map<String, serde_json::Value> = heights
-        .into_iter()
-        .map(|(k, v)| (format!("{:.1}", k as f32 / 10.0), v.into()))
-        .collect();
-    // What the drawn samples afford: (first supported pose, first valid pose) counts.
-    let mut kinds = std::collections::BTreeMap::<String, usize>::new();
-    for a in afford_all(&scene, &samples, &config)? {
-        *kinds
-            .entry(format!("{}:{:?}/{:?}", a.clear, a.supported, a.valid))
-            .or_default() += 1;
-    }
+    let drawn = drawn_summary(&scene, &samples, &config)?;
     let summary = serde_json::json!({
-        "affords_clear_supported_valid": kinds,
-        "drawn_by_height_m": heights,
+        "affords_clear_supported_valid": drawn["affords_clear_supported_valid"],
+        "drawn_by_height_m": drawn["drawn_by_height_m"],
         "scene": args.scene.as_ref().map(|p| p.display().to_string()).unwrap_or(format!("generated room {}", args.seed)),
         "samples": samples.len(),
         "kept": region.samples.len(),
@@ -241,17 +226,6 @@ fn one(args: &Args, vae: &Cvae) -> Result<()> {
         }
     );
     Ok(())
-}
-
-/// Means of the quality figures.
-fn mean(q: &[RegionQuality]) -> serde_json::Value {
-    let m = |f: fn(&RegionQuality) -> f64| q.iter().map(f).sum::<f64>() / q.len().max(1) as f64;
-    serde_json::json!({
-        "kept_pct": m(|x| x.kept_pct),
-        "affordable_pct": m(|x| x.affordable_pct),
-        "floor_coverage_pct": m(|x| x.floor_coverage_pct),
-        "seat_coverage_pct": m(|x| x.seat_coverage_pct),
-    })
 }
 
 fn many(args: &Args, vae: &Cvae, rooms: u64) -> Result<()> {
@@ -289,28 +263,22 @@ fn many(args: &Args, vae: &Cvae, rooms: u64) -> Result<()> {
         .enumerate()
         .map(|(k, q)| serde_json::json!({"seed": 10_000 + k as u64, "quality": q}))
         .collect();
-    let fm = |f: fn(&Field3Report) -> f64| {
-        fields.iter().map(f).sum::<f64>() / fields.len().max(1) as f64
-    };
-    let o = mean(&ours);
-    let line = serde_json::json!({
+    let mut line = serde_json::json!({
         "rooms": rooms,
         "samples_per_room": args.samples,
-        "affordable_pct": o["affordable_pct"],
-        "kept_pct": o["kept_pct"],
-        "floor_coverage_pct": o["floor_coverage_pct"],
-        "seat_coverage_pct": o["seat_coverage_pct"],
-        "min_floor_coverage_pct": ours.iter().map(|q| q.floor_coverage_pct).fold(f64::INFINITY, f64::min),
-        "min_seat_coverage_pct": ours.iter().map(|q| q.seat_coverage_pct).fold(f64::INFINITY, f64::min),
-        "untrained_vae": mean(&random),
-        "uniform_box": mean(&uniform),
-        "field_rooms": fields.len(),
-        "field_median_err_m": (!fields.is_empty()).then(|| fm(|r| r.median_err_m)),
-        "field_p95_err_m": (!fields.is_empty()).then(|| fm(|r| r.p95_err_m)),
-        "field_worst_p95_err_m": fields.iter().map(|r| r.p95_err_m).fold(None, |a: Option<f64>, b| Some(a.map_or(b, |a| a.max(b)))),
-        "train_s_per_room": (!fields.is_empty()).then(|| fm(|r| r.train_s)),
+        "untrained_vae": RegionQuality::mean_json(&random),
+        "uniform_box": RegionQuality::mean_json(&uniform),
         "per_room": per_room,
     });
+    let parts = [
+        RegionQuality::summary_json(&ours),
+        Field3Report::summary_json(&fields),
+    ];
+    for part in parts.iter().filter_map(|p| p.as_object()) {
+        for (k, v) in part {
+            line[k] = v.clone();
+        }
+    }
     if !args.json {
         eprintln!("{}", serde_json::to_string_pretty(&line)?);
     }

@@ -12,18 +12,14 @@
 //! cargo run --release --example maze_nav -- --generator perfect --size 41 --count 50 --png out.png --paths paths.json
 //! ```
 
-use anyhow::{bail, Context, Result};
+use anyhow::{bail, Result};
 use clap::Parser;
-use envfield::eikonal::GraphDistance;
-use envfield::grid::{
-    write_atomic, Cell2, FieldModel, HeatMapStyle, Maze, MoveRule, Neighbourhood2,
-};
-use envfield::mazes::{GeneratorKind, MazeGenerator};
+use envfield::grid::{write_atomic, Cell2, MoveRule};
+use envfield::mazes::{GeneratorKind, MazeSet};
 use envfield::models::ModelSource;
 use envfield::nets::NetsError;
 use envfield::plan::{
-    evaluate, AStar, DecisionProfile, EvalConfig, NamedPlanner, Planner, PlannerKind,
-    PlannerOptions, Report,
+    evaluate, summary_table, DecisionProfile, EvalConfig, NamedPlanner, PlannerKind, PlannerOptions,
 };
 use std::path::{Path, PathBuf};
 
@@ -123,72 +119,6 @@ enum LoadError {
     Plan(#[from] envfield::plan::PlanError),
 }
 
-struct Suite {
-    label: String,
-    mazes: Vec<Maze>,
-}
-
-fn draw(
-    path: &PathBuf,
-    choice: &NamedPlanner,
-    mazes: &[Maze],
-    report: &Report,
-    rule: MoveRule,
-) -> Result<()> {
-    let first = report.results.first().context("no pair to draw")?;
-    let grid = &mazes[first.maze].grid;
-    let graph = GraphDistance::new(Neighbourhood2::Eight(rule));
-    let field = match choice.field_model() {
-        Some(m) => m.predict(grid, first.goal)?,
-        None => graph.predict(grid, first.goal)?,
-    };
-    let optimal = AStar { rule }
-        .plan(grid, first.start, first.goal, usize::MAX / 4)?
-        .path;
-    let scale = (640 / grid.rows().max(grid.cols())).clamp(2, 32) as u32;
-    let style = HeatMapStyle {
-        scale,
-        grid: Some(grid),
-        path: &first.path,
-        reference_path: &optimal,
-        start: Some(first.start),
-        goal: Some(first.goal),
-    };
-    field.write_png(path, &style)?;
-    eprintln!(
-        "wrote {} (red: {} path, white: optimal path)",
-        path.display(),
-        choice.planner().name()
-    );
-    Ok(())
-}
-
-/// Prints a decision profile as a table, or as one JSON line.
-fn print_profile(label: &str, planner: &str, p: &DecisionProfile, json: bool) -> Result<()> {
-    if json {
-        let line = serde_json::json!({"mazes": label, "planner": planner, "profile": p});
-        println!("{line}");
-        return Ok(());
-    }
-    let pct = |n: usize, of: usize| 100.0 * n as f64 / of.max(1) as f64;
-    println!("{label}, {planner}: descent from every reachable cell, by distance to the goal");
-    println!(
-        "{:>9} {:>8} {:>9} {:>10}",
-        "distance", "cells", "wrong %", "failing %"
-    );
-    let rows = p.bands.iter().enumerate().filter(|(_, b)| b.cells > 0);
-    for (k, b) in rows {
-        let (lo, hi) = (k as f32 * p.width, (k + 1) as f32 * p.width);
-        let band = format!("{lo}-{hi}");
-        let (w, f) = (pct(b.wrong, b.cells), pct(b.failing, b.cells));
-        println!("{band:>9} {:>8} {w:>9.2} {f:>10.2}", b.cells);
-    }
-    let t = p.total();
-    let (w, f) = (pct(t.wrong, t.cells), pct(t.failing, t.cells));
-    println!("{:>9} {:>8} {w:>9.2} {f:>10.2}", "all", t.cells);
-    Ok(())
-}
-
 /// The planners of a run without `--planner`.
 const DEFAULT_PLANNERS: [PlannerKind; 6] = [
     PlannerKind::Field,
@@ -232,40 +162,19 @@ fn main() -> Result<()> {
     }
     let explicit_planners = args.planner.is_some();
     let planners = args.planner.clone().unwrap_or(DEFAULT_PLANNERS.to_vec());
-    let suites: Vec<Suite> = match (&args.mazes, args.size) {
-        (Some(file), _) => vec![Suite {
-            label: file
-                .file_name()
-                .map(|f| f.to_string_lossy().into_owned())
-                .unwrap_or_default(),
-            mazes: envfield::grid::read_mazes(file)?,
-        }],
-        (None, Some(size)) => vec![Suite {
-            label: format!("{kind} {size}x{size}"),
-            mazes: MazeGenerator::new(kind, size)?.generate_many(args.count, args.seed)?,
-        }],
-        (None, None) if vin_test_sets().is_some() => vin_test_sets()
-            .unwrap_or_default()
-            .iter()
-            .map(|file| {
-                Ok(Suite {
-                    label: file
-                        .file_name()
-                        .map(|f| f.to_string_lossy().into_owned())
-                        .unwrap_or_default(),
-                    mazes: envfield::grid::read_mazes(file)?,
-                })
-            })
-            .collect::<Result<_>>()?,
-        (None, None) => [8usize, 16, 28]
-            .into_iter()
-            .map(|size| {
-                Ok(Suite {
-                    label: format!("{kind} {size}x{size}"),
-                    mazes: MazeGenerator::new(kind, size)?.generate_many(args.count, args.seed)?,
-                })
-            })
-            .collect::<Result<_>>()?,
+    let sets: Vec<MazeSet> = match (&args.mazes, args.size) {
+        (Some(file), _) => vec![MazeSet::read(file, rule)?],
+        (None, Some(size)) => vec![MazeSet::generated(kind, size, args.count, args.seed, rule)?],
+        (None, None) => match vin_test_sets() {
+            Some(files) => files
+                .iter()
+                .map(|f| MazeSet::read(f, rule))
+                .collect::<Result<_, _>>()?,
+            None => [8usize, 16, 28]
+                .into_iter()
+                .map(|size| MazeSet::generated(kind, size, args.count, args.seed, rule))
+                .collect::<Result<_, _>>()?,
+        },
     };
     let options = PlannerOptions {
         rule,
@@ -286,7 +195,7 @@ fn main() -> Result<()> {
 
     let mut all_paths = Vec::new();
     let mut lines = Vec::new();
-    for suite in &suites {
+    for suite in &sets {
         let size = suite
             .mazes
             .first()
@@ -334,7 +243,12 @@ fn main() -> Result<()> {
             }
             if let Some(png) = &args.png {
                 if lines.is_empty() {
-                    draw(png, choice, &suite.mazes, &report, rule)?;
+                    report.write_first_png(png, &suite.mazes, choice.field_model(), rule)?;
+                    eprintln!(
+                        "wrote {} (red: {} path, white: optimal path)",
+                        png.display(),
+                        choice.planner().name()
+                    );
                 }
             }
             let s = &report.summary;
@@ -344,7 +258,13 @@ fn main() -> Result<()> {
                     let grid = &suite.mazes[r.maze].grid;
                     profile.add(grid, rule, r.goal, &model.predict(grid, r.goal)?)?;
                 }
-                print_profile(&suite.label, &s.planner, &profile, args.json)?;
+                match args.json {
+                    true => println!(
+                        "{}",
+                        serde_json::json!({"mazes": suite.label, "planner": s.planner, "profile": profile})
+                    ),
+                    false => print!("{}", profile.table(&suite.label, &s.planner)),
+                }
             }
             lines.push((suite.label.clone(), s.clone()));
             if args.json {
@@ -369,16 +289,7 @@ fn main() -> Result<()> {
             "rule: {rule}, {} pair(s) per maze without S/G, seed {}",
             args.pairs, args.seed
         );
-        println!(
-            "{:<22} {:<14} {:>6} {:>7} {:>10} {:>11} {:>11}",
-            "mazes", "planner", "mazes", "pairs", "success %", "path ratio", "ms/path"
-        );
-        for (label, s) in &lines {
-            println!(
-                "{:<22} {:<14} {:>6} {:>7} {:>10.2} {:>11.4} {:>11.4}",
-                label, s.planner, s.mazes, s.pairs, s.success_rate, s.path_ratio, s.ms_per_path
-            );
-        }
+        print!("{}", summary_table(&lines));
     }
     Ok(())
 }

@@ -16,6 +16,42 @@ pub struct MazeSet {
     pub mazes: Vec<Maze>,
 }
 
+impl MazeSet {
+    /// The mazes of a maze file, labelled by the file's name.
+    ///
+    /// # Errors
+    /// Errors of reading and parsing the file.
+    pub fn read(file: &Path, rule: MoveRule) -> Result<Self> {
+        Ok(Self {
+            label: file
+                .file_name()
+                .map(|f| f.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+            rule,
+            mazes: read_mazes(file)?,
+        })
+    }
+
+    /// `count` generated mazes of `kind`, `size` cells a side, from `seed`, labelled
+    /// `"{kind} {size}x{size}"`.
+    ///
+    /// # Errors
+    /// Errors of the generator (a size it cannot make).
+    pub fn generated(
+        kind: GeneratorKind,
+        size: usize,
+        count: usize,
+        seed: u64,
+        rule: MoveRule,
+    ) -> Result<Self> {
+        Ok(Self {
+            label: format!("{kind} {size}x{size}"),
+            rule,
+            mazes: MazeGenerator::new(kind, size)?.generate_many(count, seed)?,
+        })
+    }
+}
+
 /// The suite's sets: gridworlds (the `vin` rule) at 8 to 64 cells a side, crossings and rooms
 /// at 8 to 64 and perfect mazes at 21 to 63 (the `strict` rule), `count` mazes each from
 /// `seed`; a perfect maze without its border, two 16x40 windows; VIN's test sets from

@@ -86,6 +86,32 @@ impl ParamStore {
         &self.names
     }
 
+    /// The parameters as named tensors, in creation order: what a weight file holds.
+    pub fn named_tensors(&self) -> Vec<(String, Tensor)> {
+        self.names
+            .iter()
+            .cloned()
+            .zip(self.vars.iter().map(|v| v.as_tensor().clone()))
+            .collect()
+    }
+
+    /// Sets every parameter from `file` (read from `path`), each checked by name and shape,
+    /// and takes them out of it. Nothing is set unless every parameter is there.
+    ///
+    /// # Errors
+    /// [`NetsError::MissingWeight`] and [`NetsError::ShapeMismatch`] naming the parameter and
+    /// the file.
+    pub fn load_from(&self, path: &Path, file: &mut TensorFile) -> Result<()> {
+        let mut loaded = Vec::with_capacity(self.vars.len());
+        for (name, var) in self.names.iter().zip(&self.vars) {
+            loaded.push(file.take(path, name, var.dims(), &self.device)?);
+        }
+        for (var, t) in self.vars.iter().zip(loaded) {
+            var.set(&t)?;
+        }
+        Ok(())
+    }
+
     /// Total number of scalars.
     pub fn count(&self) -> usize {
         self.vars.iter().map(|v| v.elem_count()).sum()
@@ -220,6 +246,36 @@ pub fn to_safetensors(
     }
     safetensors::tensor::serialize(views, Some(metadata))
         .map_err(|e| NetsError::InvalidInput(format!("cannot serialise tensors: {e}")))
+}
+
+/// The metadata of a weight file of `format` whose config is `config` (as JSON).
+///
+/// # Errors
+/// [`NetsError::InvalidConfig`] for a config that does not serialise.
+pub fn weight_metadata(
+    format: &str,
+    config: &impl serde::Serialize,
+) -> Result<HashMap<String, String>> {
+    let json = serde_json::to_string(config)
+        .map_err(|e| NetsError::InvalidConfig(format!("cannot serialise the config: {e}")))?;
+    Ok(HashMap::from([
+        (META_FORMAT.to_string(), format.to_string()),
+        (META_CONFIG.to_string(), json),
+    ]))
+}
+
+/// Writes named tensors and metadata as one safetensors file, atomically (a temporary file,
+/// then a rename): the one writer of every envfield weight file and checkpoint.
+///
+/// # Errors
+/// I/O errors naming the file.
+pub fn write_weights(
+    path: &Path,
+    tensors: &[(String, Tensor)],
+    metadata: HashMap<String, String>,
+) -> Result<()> {
+    envfield_grid::write_atomic(path, &to_safetensors(tensors, metadata)?)?;
+    Ok(())
 }
 
 /// A safetensors file read into memory: its metadata and its f32 tensors by name.

@@ -71,6 +71,70 @@ pub struct Report {
     pub results: Vec<PairResult>,
 }
 
+/// Summaries as a text table, one row per `(label, summary)`: mazes, planner, mazes, pairs,
+/// success %, path ratio, ms per path.
+pub fn summary_table(rows: &[(String, Summary)]) -> String {
+    use std::fmt::Write;
+    let mut out = format!(
+        "{:<22} {:<14} {:>6} {:>7} {:>10} {:>11} {:>11}\n",
+        "mazes", "planner", "mazes", "pairs", "success %", "path ratio", "ms/path"
+    );
+    for (label, s) in rows {
+        let _ = writeln!(
+            out,
+            "{:<22} {:<14} {:>6} {:>7} {:>10.2} {:>11.4} {:>11.4}",
+            label, s.planner, s.mazes, s.pairs, s.success_rate, s.path_ratio, s.ms_per_path
+        );
+    }
+    out
+}
+
+impl Report {
+    /// A picture of the first pair of the report (on `mazes`, the mazes it was made on): the
+    /// field of `field` (the exact graph distance under `rule` when `None`), the obstacles,
+    /// the planner's path in red and a shortest path (A*) in white, as a PNG at `path`.
+    ///
+    /// # Errors
+    /// [`PlanError::Invalid`](crate::PlanError) for a report without a pair; errors of the
+    /// field, the search and the file.
+    pub fn write_first_png(
+        &self,
+        path: &std::path::Path,
+        mazes: &[Maze],
+        field: Option<&dyn envfield_grid::FieldModel>,
+        rule: MoveRule,
+    ) -> Result<()> {
+        use envfield_grid::{FieldModel, HeatMapStyle};
+        let first = self
+            .results
+            .first()
+            .ok_or_else(|| crate::PlanError::Invalid("no pair to draw".into()))?;
+        let grid = &mazes
+            .get(first.maze)
+            .ok_or_else(|| crate::PlanError::Invalid("the pair's maze is not there".into()))?
+            .grid;
+        let values = match field {
+            Some(m) => m.predict(grid, first.goal)?,
+            None => envfield_eikonal::GraphDistance::new(Neighbourhood2::Eight(rule))
+                .predict(grid, first.goal)?,
+        };
+        let optimal = crate::AStar { rule }
+            .plan(grid, first.start, first.goal, usize::MAX / 4)?
+            .path;
+        let scale = (640 / grid.rows().max(grid.cols())).clamp(2, 32) as u32;
+        let style = HeatMapStyle {
+            scale,
+            grid: Some(grid),
+            path: &first.path,
+            reference_path: &optimal,
+            start: Some(first.start),
+            goal: Some(first.goal),
+        };
+        values.write_png(path, &style)?;
+        Ok(())
+    }
+}
+
 /// Whether `path` is a walk of legal moves under `rule` from `start`.
 pub fn is_legal_walk(grid: &Grid2, rule: MoveRule, path: &[Cell2]) -> bool {
     path.first().is_some_and(|&c| grid.is_free(c))

@@ -58,7 +58,7 @@ pub use descent::{descend, FieldDescent};
 pub use error::{PlanError, Result};
 pub use gradient::{gradient_descent, ContinuousPath, GradientDescentConfig};
 pub use harness::{
-    evaluate, evaluate_pairs, is_legal_walk, EvalConfig, PairResult, Report, Summary,
+    evaluate, evaluate_pairs, is_legal_walk, summary_table, EvalConfig, PairResult, Report, Summary,
 };
 pub use named::{BoxedField, BoxedPolicy, Learned, NamedPlanner, PlannerKind, PlannerOptions};
 pub use planner::{path_length, PlanOutcome, Planner};

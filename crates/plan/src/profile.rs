@@ -93,6 +93,33 @@ impl DecisionProfile {
         Ok(())
     }
 
+    /// The profile as a text table under a heading naming `label` and `planner`: per band of
+    /// distance, the cells and the shares of wrong and failing moves, then all bands.
+    pub fn table(&self, label: &str, planner: &str) -> String {
+        use std::fmt::Write;
+        let pct = |n: usize, of: usize| 100.0 * n as f64 / of.max(1) as f64;
+        let mut out = String::new();
+        let _ = writeln!(
+            out,
+            "{label}, {planner}: descent from every reachable cell, by distance to the goal"
+        );
+        let _ = writeln!(
+            out,
+            "{:>9} {:>8} {:>9} {:>10}",
+            "distance", "cells", "wrong %", "failing %"
+        );
+        for (k, b) in self.bands.iter().enumerate().filter(|(_, b)| b.cells > 0) {
+            let (lo, hi) = (k as f32 * self.width, (k + 1) as f32 * self.width);
+            let band = format!("{lo}-{hi}");
+            let (w, f) = (pct(b.wrong, b.cells), pct(b.failing, b.cells));
+            let _ = writeln!(out, "{band:>9} {:>8} {w:>9.2} {f:>10.2}", b.cells);
+        }
+        let t = self.total();
+        let (w, f) = (pct(t.wrong, t.cells), pct(t.failing, t.cells));
+        let _ = writeln!(out, "{:>9} {:>8} {w:>9.2} {f:>10.2}", "all", t.cells);
+        out
+    }
+
     /// All bands together.
     pub fn total(&self) -> Band {
         self.bands.iter().fold(Band::default(), |a, b| Band {

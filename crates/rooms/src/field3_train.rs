@@ -74,6 +74,26 @@ pub struct Field3Report {
     pub train_s: f64,
 }
 
+impl Field3Report {
+    /// Reports of several rooms as JSON: `field_rooms`, the means `field_median_err_m`,
+    /// `field_p95_err_m` and `train_s_per_room`, and `field_worst_p95_err_m` (null without a
+    /// report).
+    pub fn summary_json(reports: &[Field3Report]) -> serde_json::Value {
+        let any = !reports.is_empty();
+        let mean = |f: fn(&Field3Report) -> f64| {
+            any.then(|| reports.iter().map(f).sum::<f64>() / reports.len() as f64)
+        };
+        let worst = reports.iter().map(|r| r.p95_err_m).reduce(f64::max);
+        serde_json::json!({
+            "field_rooms": reports.len(),
+            "field_median_err_m": mean(|r| r.median_err_m),
+            "field_p95_err_m": mean(|r| r.p95_err_m),
+            "field_worst_p95_err_m": worst,
+            "train_s_per_room": mean(|r| r.train_s),
+        })
+    }
+}
+
 /// Random distinct accessible voxels.
 fn pick_cells(free: &[Cell3], n: usize, rng: &mut SplitMix64) -> Vec<Cell3> {
     (0..n.min(free.len()))

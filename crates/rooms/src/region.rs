@@ -466,6 +466,62 @@ pub struct RegionQuality {
     pub seats: usize,
 }
 
+impl RegionQuality {
+    /// The mean of each percentage over `qualities` as JSON (`kept_pct`, `affordable_pct`,
+    /// `floor_coverage_pct`, `seat_coverage_pct`), 0 for none.
+    pub fn mean_json(qualities: &[RegionQuality]) -> serde_json::Value {
+        let n = qualities.len().max(1) as f64;
+        let m = |f: fn(&RegionQuality) -> f64| qualities.iter().map(f).sum::<f64>() / n;
+        serde_json::json!({
+            "kept_pct": m(|x| x.kept_pct),
+            "affordable_pct": m(|x| x.affordable_pct),
+            "floor_coverage_pct": m(|x| x.floor_coverage_pct),
+            "seat_coverage_pct": m(|x| x.seat_coverage_pct),
+        })
+    }
+}
+
+impl RegionQuality {
+    /// [`RegionQuality::mean_json`] with the least floor and seat coverage of any room
+    /// (`min_floor_coverage_pct`, `min_seat_coverage_pct`).
+    pub fn summary_json(qualities: &[RegionQuality]) -> serde_json::Value {
+        let least =
+            |f: fn(&RegionQuality) -> f64| qualities.iter().map(f).fold(f64::INFINITY, f64::min);
+        let mut out = Self::mean_json(qualities);
+        out["min_floor_coverage_pct"] = least(|q| q.floor_coverage_pct).into();
+        out["min_seat_coverage_pct"] = least(|q| q.seat_coverage_pct).into();
+        out
+    }
+}
+
+/// What drawn torso samples are, before the filter: how many lie in each 0.1 m band of height
+/// (keyed by the band's floor, `"0.9"`), and how many fall in each class of what they afford
+/// (`"clear:first supported/first valid"`, such as `"true:Some(Standing)/None"`).
+///
+/// # Errors
+/// As [`afford_all`].
+pub fn drawn_summary(
+    scene: &Scene,
+    samples: &[[f32; 3]],
+    config: &RegionConfig,
+) -> Result<serde_json::Value> {
+    let mut heights = std::collections::BTreeMap::<i32, usize>::new();
+    for s in samples {
+        *heights.entry((s[2] * 10.0).floor() as i32).or_default() += 1;
+    }
+    let heights: serde_json::Map<String, serde_json::Value> = heights
+        .into_iter()
+        .map(|(k, v)| (format!("{:.1}", k as f32 / 10.0), v.into()))
+        .collect();
+    let mut kinds = std::collections::BTreeMap::<String, usize>::new();
+    for a in afford_all(scene, samples, config)? {
+        *kinds
+            .entry(format!("{}:{:?}/{:?}", a.clear, a.supported, a.valid))
+            .or_default() += 1;
+    }
+    Ok(serde_json::json!({"drawn_by_height_m": heights, "affords_clear_supported_valid": kinds}))
+}
+
 /// Judges `samples` drawn for `room`: the filter's figures, floor coverage and seat coverage.
 ///
 /// # Errors

@@ -3,7 +3,7 @@
 
 use crate::{Cvae, Result, VaeConfig, VaeError};
 use candle_core::Tensor;
-use envfield_nets::params::{to_safetensors, TensorFile, META_CONFIG, META_FORMAT};
+use envfield_nets::params::{weight_metadata, write_weights, TensorFile, META_CONFIG};
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -16,21 +16,8 @@ pub(crate) type Named = (Vec<(String, Tensor)>, HashMap<String, String>);
 impl Cvae {
     /// The weights as named tensors and the file's metadata (format and config).
     pub(crate) fn named(&self) -> Result<Named> {
-        let tensors = self
-            .store
-            .names()
-            .iter()
-            .cloned()
-            .zip(self.store.vars().iter().map(|v| v.as_tensor().clone()))
-            .collect();
-        let mut meta = HashMap::new();
-        meta.insert(META_FORMAT.to_string(), FORMAT.to_string());
-        meta.insert(
-            META_CONFIG.to_string(),
-            serde_json::to_string(&self.config)
-                .map_err(|e| VaeError::InvalidInput(format!("cannot serialise the config: {e}")))?,
-        );
-        Ok((tensors, meta))
+        let meta = weight_metadata(FORMAT, &self.config)?;
+        Ok((self.store.named_tensors(), meta))
     }
 
     /// Saves the weights and config as safetensors, atomically (a temporary file, then a
@@ -40,9 +27,7 @@ impl Cvae {
     /// I/O errors, naming the file.
     pub fn save(&self, path: impl AsRef<Path>) -> Result<()> {
         let (tensors, meta) = self.named()?;
-        let bytes = to_safetensors(&tensors, meta)?;
-        envfield_grid::write_atomic(path.as_ref(), &bytes)?;
-        Ok(())
+        Ok(write_weights(path.as_ref(), &tensors, meta)?)
     }
 
     /// Loads a VAE saved by [`Cvae::save`] (or a training checkpoint), rebuilding it from the
@@ -72,10 +57,7 @@ impl Cvae {
             .validate()
             .map_err(|e| bad(format!("bad config: {e}")))?;
         let vae = Self::new(config, 0)?;
-        for (name, var) in vae.store.names().iter().zip(vae.store.vars()) {
-            let t = file.take(path, name, var.dims(), &vae.device)?;
-            var.set(&t)?;
-        }
+        vae.store.load_from(path, file)?;
         Ok(vae)
     }
 }

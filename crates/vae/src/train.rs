@@ -8,7 +8,7 @@ use crate::{Cvae, Result, RoomTorsos, TorsoSource, VaeError, VaeTrainConfig};
 use candle_core::Tensor;
 use envfield_grid::normals;
 use envfield_grid::SplitMix64;
-use envfield_nets::params::{to_safetensors, AdamW, TensorFile, META_STEP};
+use envfield_nets::params::{write_weights, AdamW, TensorFile, META_STEP};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 use std::time::Instant;
@@ -364,7 +364,7 @@ impl VaeTrainer {
             serde_json::to_string(&self.config)
                 .map_err(|e| VaeError::InvalidInput(format!("cannot serialise the config: {e}")))?,
         );
-        envfield_grid::write_atomic(path.as_ref(), &to_safetensors(&tensors, meta)?)?;
+        write_weights(path.as_ref(), &tensors, meta)?;
         Ok(())
     }
 

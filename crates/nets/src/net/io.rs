@@ -2,7 +2,7 @@
 
 use super::FieldNet;
 use crate::params::{
-    to_safetensors, TensorFile, FORMAT, META_CONFIG, META_FORMAT, OPTIMISER_PREFIX,
+    weight_metadata, write_weights, TensorFile, FORMAT, META_CONFIG, OPTIMISER_PREFIX,
 };
 use crate::{ModelConfig, NetsError, Result};
 use candle_core::{Device, Tensor};
@@ -10,30 +10,16 @@ use std::collections::HashMap;
 use std::path::Path;
 
 impl FieldNet {
-    fn tensors(&self) -> Vec<(String, Tensor)> {
-        self.store
-            .names()
-            .iter()
-            .cloned()
-            .zip(self.store.vars().iter().map(|v| v.as_tensor().clone()))
-            .collect()
-    }
-
     pub(crate) fn write_file(
         &self,
         path: &Path,
         extra: Vec<(String, Tensor)>,
         mut metadata: HashMap<String, String>,
     ) -> Result<()> {
-        metadata.insert(META_FORMAT.into(), FORMAT.into());
-        let config = serde_json::to_string(&self.config)
-            .map_err(|e| NetsError::InvalidConfig(format!("cannot serialise the config: {e}")))?;
-        metadata.insert(META_CONFIG.into(), config);
-        let mut tensors = self.tensors();
+        metadata.extend(weight_metadata(FORMAT, &self.config)?);
+        let mut tensors = self.store.named_tensors();
         tensors.extend(extra);
-        let bytes = to_safetensors(&tensors, metadata)?;
-        envfield_grid::write_atomic(path, &bytes)?;
-        Ok(())
+        write_weights(path, &tensors, metadata)
     }
 
     /// Saves the weights and the config as one safetensors file (written atomically).

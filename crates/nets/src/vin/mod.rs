@@ -7,14 +7,13 @@ pub use train::{vin_examples, VinExample, VinTrainConfig, VinTrainer};
 
 use crate::layers::{Conv, ConvSpec, IndexCache, Linear};
 use crate::params::{
-    to_safetensors, AdamW, Init, ParamStore, TensorFile, FORMAT, META_CONFIG, META_FORMAT,
+    weight_metadata, write_weights, AdamW, Init, ParamStore, TensorFile, FORMAT, META_CONFIG,
     META_STEP,
 };
 use crate::{NetsError, Result};
 use candle_core::{Device, Tensor, D};
 use envfield_grid::{Cell2, Grid2, MoveRule, Policy};
 use serde::{Deserialize, Serialize};
-use std::collections::HashMap;
 use std::path::Path;
 
 /// VIN's settings (the published ones by default, with `iterations` per maze size).
@@ -204,26 +203,16 @@ impl Vin {
     }
 
     pub(crate) fn write(&self, path: &Path, optimiser: Option<&AdamW>) -> Result<()> {
-        let mut tensors: Vec<(String, Tensor)> = self
-            .store
-            .names()
-            .iter()
-            .cloned()
-            .zip(self.store.vars().iter().map(|v| v.as_tensor().clone()))
-            .collect();
-        let mut meta = HashMap::new();
-        meta.insert(META_FORMAT.to_string(), FORMAT.to_string());
-        let cfg = serde_json::to_string(&VinFileConfig {
+        let mut tensors = self.store.named_tensors();
+        let file_config = VinFileConfig {
             config: self.config,
-        })
-        .map_err(|e| NetsError::InvalidConfig(e.to_string()))?;
-        meta.insert(META_CONFIG.to_string(), cfg);
+        };
+        let mut meta = weight_metadata(FORMAT, &file_config)?;
         if let Some(opt) = optimiser {
             tensors.extend(opt.state_tensors(self.store.names()));
             meta.insert(META_STEP.into(), opt.step.to_string());
         }
-        envfield_grid::write_atomic(path, &to_safetensors(&tensors, meta)?)?;
-        Ok(())
+        write_weights(path, &tensors, meta)
     }
 
     /// Loads a network saved by [`Vin::save`] or a VIN training checkpoint.
