@@ -93,10 +93,8 @@ struct Args {
 
 fn region_config(args: &Args) -> RegionConfig {
     let d = RegionConfig::default();
-    RegionConfig {
-        torso_radius: args.torso_radius.unwrap_or(d.torso_radius),
-        ..d
-    }
+    let torso_radius = args.torso_radius.unwrap_or(d.torso_radius);
+    RegionConfig { torso_radius, ..d }
 }
 
 /// The learned field's training config: `Field3Config`'s defaults under the `--field-*` flags.
@@ -131,10 +129,10 @@ fn draw(
     seed: u64,
     gate_off: bool,
 ) -> Result<Vec<[f32; 3]>> {
-    let gate = match (args.no_gate || gate_off, args.gate_threshold) {
-        (true, _) => Gate::Off,
-        (false, Some(t)) => Gate::Threshold(t),
-        (false, None) => Gate::Trained,
+    let gate = match args.gate_threshold {
+        _ if args.no_gate || gate_off => Gate::Off,
+        Some(t) => Gate::Threshold(t),
+        None => Gate::Trained,
     };
     let options = SampleOptions::new(args.samples, seed)
         .with_temperature(args.temperature)
@@ -170,21 +168,14 @@ fn one(args: &Args, vae: &Cvae) -> Result<()> {
     let t = Instant::now();
     let region = AccessibleRegion::from_drawn(&scene, &samples, &config)?;
     let region_ms = t.elapsed().as_secs_f64() * 1e3;
-    let kept: Vec<_> = region
-        .samples
-        .iter()
-        .map(|s| envfield::scene::nalgebra::Point3::new(s[0], s[1], s[2]))
-        .collect();
-    envfield::scene::write_point_cloud(&kept, args.out.join("samples.ply"))?;
+    region.write_samples_ply(args.out.join("samples.ply"))?;
     region.write_ply(args.out.join("region.ply"))?;
     region.write_png(args.out.join("region.png"), 6)?;
     let goal = middle_goal(&region);
     let exact = ExactField3::new(&region, goal)?;
     write_field_view(&region, &exact, args.out.join("field_exact.png"))?;
-    let quality = match &room {
-        Some(r) => Some(region_quality(r, &samples, &config)?),
-        None => None,
-    };
+    let quality = room.as_ref().map(|r| region_quality(r, &samples, &config));
+    let quality = quality.transpose()?;
     let learned = if args.no_field {
         None
     } else {
@@ -217,14 +208,8 @@ fn one(args: &Args, vae: &Cvae) -> Result<()> {
         args.out.join("summary.json"),
         serde_json::to_string_pretty(&summary)?.as_bytes(),
     )?;
-    println!(
-        "{}",
-        if args.json {
-            summary.to_string()
-        } else {
-            serde_json::to_string_pretty(&summary)?
-        }
-    );
+    let text = serde_json::to_string_pretty(&summary)?;
+    println!("{}", if args.json { summary.to_string() } else { text });
     Ok(())
 }
 

@@ -58,5 +58,8 @@ pub use error::{NetsError, Result};
 pub use files::model_file;
 pub use layers::{Activation, ConvSpec, MlpConfig};
 pub use net::{BoundField, FieldNet, MAX_FIELD_CELLS};
-pub use train::{validation_loss, DataCheck, Progress, TrainConfig, TrainSummary, Trainer};
+pub use train::{
+    resume_on, validation_loss, ContextOptions, DataCheck, LossShaping, MazeRecipe, Progress,
+    TrainConfig, TrainSummary, Trainer,
+};
 pub use vin::{vin_examples, Vin, VinConfig, VinExample, VinTrainConfig, VinTrainer};

@@ -348,6 +348,19 @@ impl AccessibleRegion {
             .collect()
     }
 
+    /// Writes the kept samples as a PLY point cloud, atomically.
+    ///
+    /// # Errors
+    /// I/O errors, naming the file.
+    pub fn write_samples_ply(&self, path: impl AsRef<Path>) -> Result<()> {
+        let kept: Vec<Point3<f32>> = self
+            .samples
+            .iter()
+            .map(|s| Point3::new(s[0], s[1], s[2]))
+            .collect();
+        Ok(envfield_scene::write_point_cloud(&kept, path)?)
+    }
+
     /// Writes the accessible voxels' centres as an ASCII PLY point cloud coloured by height
     /// (blue low, yellow high), atomically.
     ///

@@ -4,10 +4,12 @@
 mod checkpoint;
 mod config;
 pub(crate) mod loss;
+mod recipe;
 mod sampler;
 
 pub use checkpoint::DataCheck;
 pub use config::{Progress, TrainConfig, TrainSummary};
+pub use recipe::{resume_on, ContextOptions, LossShaping, MazeRecipe};
 
 use crate::params::AdamW;
 use crate::{Batch, FieldNet, NetsError, Result};
