@@ -12,12 +12,12 @@
 #![allow(missing_docs)]
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use envfield::affordance::{walk, Support, WalkConfig};
-use envfield::grid::{ContinuousField3, Point3m};
+use envfield::affordance::{walk, WalkConfig};
+use envfield::grid::ContinuousField3;
 use envfield::nets::FieldNet;
 use envfield::plan::space3::SamplingConfig;
-use envfield::rooms::harness::{Pair, PairKind, PairSetup, PlannerKind};
-use envfield::rooms::{afford, sample_region, ExactField3, LearnedField3, RegionConfig};
+use envfield::rooms::harness::{standing_places, Pair, PairKind, PairSetup, PlannerKind};
+use envfield::rooms::{sample_region, ExactField3, LearnedField3};
 use envfield::scene::{generate_room, RoomConfig};
 use envfield::vae::Cvae;
 use std::hint::black_box;
@@ -35,16 +35,7 @@ fn bench_rooms(c: &mut Criterion) {
     let room = generate_room(&RoomConfig::default(), seed).expect("room");
     // The region exactly as room_nav makes it.
     let region = sample_region(&vae, &room.scene, 6000, seed).expect("region");
-    let config = RegionConfig::default();
-    let standing: Vec<Point3m> = region
-        .samples
-        .iter()
-        .copied()
-        .filter(|&s| region.contains(s))
-        .filter(|&s| {
-            afford(&room.scene, s, &config).is_ok_and(|a| a.valid == Some(Support::Standing))
-        })
-        .collect();
+    let standing = standing_places(&room.scene, &region);
     let gait = walk(&WalkConfig::default(), seed).expect("gait");
     // Four pairs at least 2 m apart that every planner reaches.
     let mut pairs = Vec::new();

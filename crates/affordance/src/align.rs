@@ -123,6 +123,27 @@ pub fn align_to_trajectory(
     PoseSequence::new(sequence.fps, sequence.activity, frames, supports)
 }
 
+/// A walk along a floor path: `path` resampled every `step` metres ([`resample_path`]), then
+/// `gait` placed along it with its own heights kept and each frame turned for the best fit in
+/// `scene` ([`align_in_scene`] with [`AlignConfig::keep_height`]). Returns the placed
+/// sequence and each frame's check.
+///
+/// # Errors
+/// As [`resample_path`] and [`align_in_scene`].
+pub fn walk_along(
+    scene: &Scene,
+    gait: &PoseSequence,
+    path: &[Point3<f32>],
+    step: f32,
+) -> Result<(PoseSequence, Vec<AffordanceReport>)> {
+    let trajectory = resample_path(path, step)?;
+    let config = AlignConfig {
+        keep_height: true,
+        ..AlignConfig::default()
+    };
+    align_in_scene(scene, gait, &trajectory, &config)
+}
+
 /// [`align_to_trajectory`], then for each frame the rotation within
 /// `+-config.search_degrees` of the aligned one that gives the most supported, collision-free
 /// joints in `scene` (ties: the smallest change). Returns the placed sequence and each

@@ -32,7 +32,7 @@ mod error;
 mod motion;
 mod skeleton;
 
-pub use align::{align_in_scene, align_to_trajectory, resample_path, AlignConfig};
+pub use align::{align_in_scene, align_to_trajectory, resample_path, walk_along, AlignConfig};
 pub use check::{check_pose, check_sequence, AffordanceConfig, AffordanceReport};
 pub use error::{AffordanceError, Result};
 pub use motion::{

@@ -208,6 +208,19 @@ pub struct Pair {
     pub kind: PairKind,
 }
 
+/// The region's standing places: its kept samples that lie in it and afford standing (a
+/// standing pose there is supported and collision-free), in the samples' order.
+pub fn standing_places(scene: &Scene, region: &AccessibleRegion) -> Vec<Point3m> {
+    let config = RegionConfig::default();
+    region
+        .samples
+        .iter()
+        .copied()
+        .filter(|&s| region.contains(s))
+        .filter(|&s| afford(scene, s, &config).is_ok_and(|a| a.valid == Some(Support::Standing)))
+        .collect()
+}
+
 /// Walking pairs between standing places of the region (kept samples that afford standing)
 /// at least a metre apart along the exact field, `count` of them (fewer when 100 `count`
 /// draws do not find them), then, for a generated `room`, a sit-down pair at every seat whose
@@ -223,14 +236,7 @@ pub fn pairs(
     count: usize,
     seed: u64,
 ) -> Result<Vec<Pair>> {
-    let config = RegionConfig::default();
-    let standing: Vec<Point3m> = region
-        .samples
-        .iter()
-        .copied()
-        .filter(|&s| region.contains(s))
-        .filter(|&s| afford(scene, s, &config).is_ok_and(|a| a.valid == Some(Support::Standing)))
-        .collect();
+    let standing = standing_places(scene, region);
     if standing.len() < 2 {
         return Err(RoomsError::InvalidInput(
             "fewer than two standing places in the accessible region".into(),

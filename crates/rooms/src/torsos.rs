@@ -4,9 +4,8 @@
 
 use crate::{Result, RoomsError};
 use envfield_affordance::{
-    align_in_scene, check_pose, check_sequence, lie_down, resample_path, sit_down, standing_pose,
-    walk, AffordanceConfig, AlignConfig, LieConfig, Pose, PoseSequence, SitConfig, Support,
-    WalkConfig,
+    check_pose, check_sequence, lie_down, sit_down, standing_pose, walk, walk_along,
+    AffordanceConfig, LieConfig, Pose, PoseSequence, SitConfig, Support, WalkConfig,
 };
 use envfield_eikonal::FastMarching;
 use envfield_grid::{MoveRule, SplitMix64};
@@ -228,16 +227,8 @@ fn walks(room: &Room, cfg: &TorsoDataConfig, seed: u64) -> Result<Vec<[f32; 3]>>
             })
             .collect();
         let gait = walk(&WalkConfig::default(), seed.wrapping_add(w as u64))?;
-        let trajectory = resample_path(&points, gait.step_length().max(0.01))?;
-        let (aligned, reports) = align_in_scene(
-            &room.scene,
-            &gait,
-            &trajectory,
-            &AlignConfig {
-                keep_height: true,
-                ..AlignConfig::default()
-            },
-        )?;
+        let step = gait.step_length().max(0.01);
+        let (aligned, reports) = walk_along(&room.scene, &gait, &points, step)?;
         out.extend(
             aligned
                 .frames

@@ -13,9 +13,7 @@ pub use picture::crowd_frames;
 pub use tally::CrowdTally;
 
 use crate::Result;
-use envfield_affordance::{
-    align_in_scene, resample_path, AffordanceReport, AlignConfig, PoseSequence,
-};
+use envfield_affordance::{walk_along, AffordanceReport, PoseSequence};
 use envfield_grid::{Grid2, Point2};
 use envfield_plan::crowd::CrowdRun;
 use envfield_scene::nalgebra::Point3;
@@ -83,11 +81,6 @@ impl Floor {
         gait: &PoseSequence,
     ) -> Result<(PoseSequence, Vec<AffordanceReport>)> {
         let path: Vec<Point3<f32>> = run.path(i).iter().map(|&p| self.world(p)).collect();
-        let trajectory = resample_path(&path, gait.step_length())?;
-        let align = AlignConfig {
-            keep_height: true,
-            ..AlignConfig::default()
-        };
-        Ok(align_in_scene(&self.scene, gait, &trajectory, &align)?)
+        Ok(walk_along(&self.scene, gait, &path, gait.step_length())?)
     }
 }
