@@ -1,5 +1,6 @@
 //! [`TargetEncoding`]: how distances become network outputs and back. It is the one place
-//! that encodes targets for training and decodes predictions for inference.
+//! that encodes targets for training, encodes the distances a network computes, and decodes
+//! predictions for inference.
 
 use crate::{NetsError, Result};
 use serde::{Deserialize, Serialize};
@@ -53,6 +54,20 @@ impl TargetEncoding {
             Self::Reciprocal => 1.0 / (1.0 + distance),
             Self::Linear { scale } => (1.0 - distance / scale).max(0.0),
         }
+    }
+
+    /// [`TargetEncoding::encode`] on a tensor of distances the network computed, inside the
+    /// graph (gradients flow): the reciprocal encoding of a negative distance is that of 0;
+    /// the linear one continues its line on both sides. Blocked cells are the caller's (they
+    /// carry no distance).
+    ///
+    /// # Errors
+    /// Candle's errors.
+    pub fn encode_tensor(self, distance: &candle_core::Tensor) -> Result<candle_core::Tensor> {
+        Ok(match self {
+            Self::Reciprocal => (distance.relu()? + 1.0)?.recip()?,
+            Self::Linear { scale } => distance.affine(-1.0 / scale as f64, 1.0)?,
+        })
     }
 
     /// Decodes a raw network output into a distance in cells, monotone (a larger output is

@@ -13,7 +13,7 @@ pub(crate) use io::read_config;
 
 use crate::layers::{encode_coords, sample_features, ConvStack, IndexCache, Mlp};
 use crate::params::ParamStore;
-use crate::{Batch, ContextConfig, HyperConfig, ModelConfig, NetsError, Result, TargetEncoding};
+use crate::{Batch, ContextConfig, HyperConfig, ModelConfig, NetsError, Result};
 use candle_core::{Device, Tensor, Var};
 use context::Propagation;
 use envfield_grid::{Cell2, Field2, FieldModel, Grid2, GridError, MoveRule};
@@ -248,7 +248,7 @@ impl FieldNet {
                 if c.detour {
                     // The straight line, kept off 0 so its gradient stays finite at the goal.
                     let line = ((queries - &goals)?.sqr()?.sum_keepdim(1)? + 1e-6)?.sqrt()?;
-                    encode_distance(&(line + raw)?, c.encoding)?
+                    c.encoding.encode_tensor(&(line + raw)?)?
                 } else {
                     raw
                 }
@@ -470,13 +470,6 @@ impl FieldNet {
 
 /// Distances (N, 1) in cells encoded as outputs: `1 - d / scale` (not clamped, so a blocked
 /// target of -1 stays reachable) or `1 / (1 + max(d, 0))`.
-fn encode_distance(d: &Tensor, encoding: TargetEncoding) -> Result<Tensor> {
-    Ok(match encoding {
-        TargetEncoding::Reciprocal => (d.relu()? + 1.0)?.recip()?,
-        TargetEncoding::Linear { scale } => d.affine(-1.0 / scale as f64, 1.0)?,
-    })
-}
-
 fn model_error(name: &str, e: NetsError) -> GridError {
     match e {
         NetsError::Grid(g) => g,

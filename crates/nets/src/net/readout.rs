@@ -65,10 +65,8 @@ impl FieldNet {
             .collect();
         let n = mask.len();
         let mask = Tensor::from_vec(mask, (n, 1), &self.device)?;
-        let encoded = match encoding {
-            TargetEncoding::Reciprocal => (v + 1.0)?.recip()?,
-            TargetEncoding::Linear { scale } => v.affine(-1.0 / scale as f64, 1.0)?.relu()?,
-        };
+        // Path values are never negative; the linear encoding stops at 0 past its scale.
+        let encoded = encoding.encode_tensor(&v)?.relu()?;
         Ok(((encoded * &mask)? + (mask - 1.0)?)?)
     }
 
