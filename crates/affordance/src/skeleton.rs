@@ -345,7 +345,7 @@ impl PoseSequence {
             frames: self
                 .frames
                 .iter()
-                .map(|f| f.joints.iter().map(|p| [p.x, p.y, p.z]).collect())
+                .map(|f| f.joints.iter().map(|p| <[f32; 3]>::from(*p)).collect())
                 .collect(),
             supports: Some(self.supports.clone()),
         };

@@ -67,7 +67,7 @@ pub fn suite_sets(
     minigrid_dir: Option<&Path>,
 ) -> Result<Vec<MazeSet>> {
     let generated = |kind: GeneratorKind, size: usize| -> Result<Vec<Maze>> {
-        Ok(MazeGenerator::new(kind, size)?.generate_many(count, seed)?)
+        MazeGenerator::new(kind, size)?.generate_many(count, seed)
     };
     let mut out = Vec::new();
     for (kind, rule, sizes) in [

@@ -14,7 +14,7 @@ use envfield_vae::{Cvae, SampleOptions};
 pub fn vae_cloud(vae: &Cvae, scene: &Scene, seed: u64) -> Result<Vec<[f32; 3]>> {
     Ok(sample_surface(scene, vae.cloud_points(), seed)?
         .iter()
-        .map(|p| [p.x, p.y, p.z])
+        .map(|p| <[f32; 3]>::from(*p))
         .collect())
 }
 

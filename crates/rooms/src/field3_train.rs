@@ -339,7 +339,7 @@ fn held_out_report(
             .iter()
             .map(|&c| {
                 let m = region.frame.center(c);
-                [m.x, m.y, m.z]
+                <[f32; 3]>::from(m)
             })
             .collect();
         let predicted = learned.values(&points)?;

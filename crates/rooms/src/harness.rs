@@ -277,7 +277,7 @@ pub fn pairs(
                     continue;
                 };
                 let (t0, t1) = (first.torso(), last.torso());
-                let (s, g) = ([t0.x, t0.y, t0.z], [t1.x, t1.y, t1.z]);
+                let (s, g) = (<[f32; 3]>::from(t0), <[f32; 3]>::from(t1));
                 if region.contains(s) && region.contains(g) {
                     out.push(Pair {
                         start: s,
@@ -320,7 +320,7 @@ pub fn fit(
         let pts: Vec<Point3<f32>> = path.iter().map(|&p| point(p)).collect();
         resample_path(&pts, step)?
             .iter()
-            .map(|p| [p.x, p.y, p.z])
+            .map(|p| <[f32; 3]>::from(*p))
             .collect()
     } else {
         path.to_vec()

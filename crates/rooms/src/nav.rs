@@ -91,7 +91,7 @@ impl PoseFilter<'_> {
         };
         frame
             .rotated_about_z(turn, &torso)
-            .translated(&(Point3::new(to[0], to[1], to[2]) - torso))
+            .translated(&(Point3::from(to) - torso))
     }
 }
 
@@ -175,7 +175,7 @@ impl StepFilter for PoseFilter<'_> {
 
 /// `p` as a point.
 pub fn point(p: Point3m) -> Point3<f32> {
-    Point3::new(p[0], p[1], p[2])
+    Point3::from(p)
 }
 
 /// A point moved by `v`.

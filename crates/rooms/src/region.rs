@@ -125,7 +125,7 @@ fn afford_with(scene: &Scene, p: [f32; 3], config: &RegionConfig, kit: &Kit) -> 
             "torso location {p:?} is not finite"
         )));
     }
-    let at = Point3::new(p[0], p[1], p[2]);
+    let at = Point3::from(p);
     let clear = scene.signed_distance(&at)? >= config.torso_radius;
     let mut out = Afford {
         clear,
@@ -290,7 +290,7 @@ impl AccessibleRegion {
         let mut on = vec![false; nx * ny * nz];
         let index = |c: Cell3| (c.x * ny + c.y) * nz + c.z;
         for p in &kept {
-            if let Some(c) = frame.cell_of(&Point3::new(p[0], p[1], p[2])) {
+            if let Some(c) = frame.cell_of(&Point3::from(*p)) {
                 on[index(c)] = true;
                 for (dx, dy, dz) in [
                     (1, 0, 0),
@@ -330,7 +330,7 @@ impl AccessibleRegion {
     /// Whether `p` (metres) lies in an accessible voxel.
     pub fn contains(&self, p: [f32; 3]) -> bool {
         self.frame
-            .cell_of(&Point3::new(p[0], p[1], p[2]))
+            .cell_of(&Point3::from(p))
             .is_some_and(|c| self.grid.is_free(c))
     }
 
@@ -343,7 +343,7 @@ impl AccessibleRegion {
                 let c = self
                     .frame
                     .center(Cell3::new(i / (ny * nz), (i / nz) % ny, i % nz));
-                [c.x, c.y, c.z]
+                <[f32; 3]>::from(c)
             })
             .collect()
     }
@@ -353,11 +353,7 @@ impl AccessibleRegion {
     /// # Errors
     /// I/O errors, naming the file.
     pub fn write_samples_ply(&self, path: impl AsRef<Path>) -> Result<()> {
-        let kept: Vec<Point3<f32>> = self
-            .samples
-            .iter()
-            .map(|s| Point3::new(s[0], s[1], s[2]))
-            .collect();
+        let kept: Vec<Point3<f32>> = self.samples.iter().map(|s| Point3::from(*s)).collect();
         Ok(envfield_scene::write_point_cloud(&kept, path)?)
     }
 
@@ -427,7 +423,7 @@ impl AccessibleRegion {
     /// # Errors
     /// [`RoomsError::InvalidInput`] naming `what` for a point outside the region.
     pub fn cell(&self, p: [f32; 3], what: &str) -> Result<Cell3> {
-        match self.frame.cell_of(&Point3::new(p[0], p[1], p[2])) {
+        match self.frame.cell_of(&Point3::from(p)) {
             Some(c) if self.grid.is_free(c) => Ok(c),
             _ => Err(RoomsError::InvalidInput(format!(
                 "{what} {p:?} is outside the accessible region"

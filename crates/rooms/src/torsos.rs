@@ -70,7 +70,7 @@ fn valid_torsos(scene: &Scene, seq: &PoseSequence) -> Result<Vec<[f32; 3]>> {
         .filter(|(_, r)| r.valid())
         .map(|(f, _)| {
             let t = f.torso();
-            [t.x, t.y, t.z]
+            <[f32; 3]>::from(t)
         })
         .collect())
 }
@@ -180,7 +180,7 @@ pub fn standing_floor(scene: &Scene, bounds: [f32; 4], spacing: f32) -> Result<V
                 &AffordanceConfig::default(),
             )?;
             let t = pose.torso();
-            Ok(r.valid().then_some([t.x, t.y, t.z]))
+            Ok(r.valid().then_some(<[f32; 3]>::from(t)))
         })
         .collect::<Result<_>>()?;
     Ok(found.into_iter().flatten().collect())
@@ -237,7 +237,7 @@ fn walks(room: &Room, cfg: &TorsoDataConfig, seed: u64) -> Result<Vec<[f32; 3]>>
                 .filter(|(_, r)| r.valid())
                 .map(|(f, _)| {
                     let t = f.torso();
-                    [t.x, t.y, t.z]
+                    <[f32; 3]>::from(t)
                 }),
         );
     }
@@ -321,7 +321,7 @@ pub fn room_torsos(room: &Room, cfg: &TorsoDataConfig, seed: u64) -> Result<Room
     }
     let cloud = sample_surface(scene, cfg.cloud_points, seed ^ 0xC10D)?
         .iter()
-        .map(|p| [p.x, p.y, p.z])
+        .map(|p| <[f32; 3]>::from(*p))
         .collect();
     Ok(RoomTorsos {
         cloud,
@@ -412,7 +412,7 @@ pub fn seat_torsos(room: &Room) -> Result<Vec<[f32; 3]>> {
         ) {
             if let Some(seq) = sit_on(f)? {
                 let t = seq.frames.last().expect("a sequence has frames").torso();
-                out.push([t.x, t.y, t.z]);
+                out.push(<[f32; 3]>::from(t));
             }
         }
     }

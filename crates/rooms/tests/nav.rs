@@ -33,7 +33,7 @@ fn scene() -> Scene {
 /// are valid; `step` resamples the path first.
 fn valid_share(scene: &Scene, path: &[[f32; 3]], step: Option<f32>) -> f64 {
     let gait = walk(&WalkConfig::default(), 1).unwrap();
-    let pts: Vec<Point3<f32>> = path.iter().map(|p| Point3::new(p[0], p[1], p[2])).collect();
+    let pts: Vec<Point3<f32>> = path.iter().map(|p| Point3::from(*p)).collect();
     let traj = match step {
         Some(s) => resample_path(&pts, s).unwrap(),
         None => pts,
@@ -102,15 +102,11 @@ fn only_the_search_with_affordance_keeps_every_pose_valid() {
     };
     let ours_valid = share(&ours.points);
     let rrt_points: Vec<[f32; 3]> = {
-        let pts: Vec<Point3<f32>> = baseline
-            .points
-            .iter()
-            .map(|p| Point3::new(p[0], p[1], p[2]))
-            .collect();
+        let pts: Vec<Point3<f32>> = baseline.points.iter().map(|p| Point3::from(*p)).collect();
         resample_path(&pts, step)
             .unwrap()
             .iter()
-            .map(|p| [p.x, p.y, p.z])
+            .map(|p| <[f32; 3]>::from(*p))
             .collect()
     };
     let rrt_valid = share(&rrt_points);

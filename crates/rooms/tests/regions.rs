@@ -97,7 +97,7 @@ fn the_exact_field_of_an_open_box_is_the_distance() {
     ] {
         let p = region.frame.center(c);
         let d = (p - goal).norm();
-        let v = field.value([p.x, p.y, p.z]).unwrap();
+        let v = field.value(<[f32; 3]>::from(p)).unwrap();
         assert!((v - d).abs() < 0.08 * d + 0.02, "{c:?}: {v} against {d}");
     }
     let g = field.gradient([2.0, 0.55, 0.25]).unwrap().unwrap();
@@ -279,7 +279,7 @@ fn the_shipped_local_vae_samples_an_unseen_room() {
     let points: Vec<[f32; 3]> = envfield_scene::sample_surface(&room.scene, vae.cloud_points(), 3)
         .unwrap()
         .iter()
-        .map(|p| [p.x, p.y, p.z])
+        .map(|p| <[f32; 3]>::from(*p))
         .collect();
     let samples = vae.sample(&points, &SampleOptions::new(1500, 3)).unwrap();
     let q = envfield_rooms::region_quality(&room, &samples, &RegionConfig::default()).unwrap();
@@ -463,7 +463,7 @@ fn the_shipped_gated_vae_samples_an_unseen_room() {
     let points: Vec<[f32; 3]> = envfield_scene::sample_surface(&room.scene, vae.cloud_points(), 3)
         .unwrap()
         .iter()
-        .map(|p| [p.x, p.y, p.z])
+        .map(|p| <[f32; 3]>::from(*p))
         .collect();
     let samples = vae.sample(&points, &SampleOptions::new(3000, 3)).unwrap();
     let q = envfield_rooms::region_quality(&room, &samples, &RegionConfig::default()).unwrap();
