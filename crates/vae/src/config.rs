@@ -74,7 +74,7 @@ pub struct GateConfig {
     /// height of 0.93 m and a sitting one of 0.53 m fills the gap between them with torsos
     /// that afford neither; with kinds the latent code only has to carry what varies within
     /// a kind. Trains on torsos labelled by the pose they afford
-    /// ([`TorsoDataConfig::affordable_only`](crate::TorsoDataConfig)).
+    /// (`envfield_rooms::TorsoDataConfig::affordable_only`).
     #[serde(default)]
     pub kinds: bool,
 }

@@ -9,7 +9,7 @@ use envfield_grid::MoveRule;
 use envfield_mazes::{Dataset, DatasetConfig, GeneratorKind, MazeGenerator, TargetKind};
 use std::path::Path;
 
-/// What [`maze_datasets`] makes for each maze size.
+/// The data of a maze training run: what [`MazeRecipe::datasets`] makes for each maze size.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MazeRecipe {
     /// The network the data is for: plain and goal-conditioned fields learn one maze.

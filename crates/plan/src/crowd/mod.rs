@@ -8,7 +8,7 @@
 //! One time step of [`walk_crowd`] (Algorithm 1):
 //! 1. for every person still walking, the map with the others' discs (twice the body radius
 //!    around their centres) marked as obstacles, and its field for that person's goal; all of
-//!    them in one [`FieldModel::predict_many`] call (one batched forward pass for a network);
+//!    them in one [`FieldModel::predict_many`](envfield_grid::FieldModel::predict_many) call (one batched forward pass for a network);
 //! 2. people whose goal the others cut off are *blocked*. Priority goes to the smaller
 //!    remaining distance (the model's own field value; ties to the lower index). A blocked
 //!    person plans again on the map with only the discs of people ahead of them in priority
