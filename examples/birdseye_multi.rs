@@ -82,6 +82,23 @@ fn main() -> Result<()> {
     if args.people == 0 || args.rooms == Some(0) {
         bail!("--people and --rooms must be at least 1");
     }
+    if args.rooms.is_some_and(|r| r > 100_000) {
+        bail!("--rooms: at most 100000");
+    }
+    if args
+        .seed
+        .checked_add(args.rooms.unwrap_or(1) as u64)
+        .is_none()
+    {
+        bail!("--seed {} + --rooms does not fit in 64 bits", args.seed);
+    }
+    if !(4..=64).contains(&args.directions) || args.max_steps == 0 || args.max_steps > 100_000 {
+        bail!(
+            "--directions must be in 4..=64 and --max-steps in 1..=100000 (got {} and {})",
+            args.directions,
+            args.max_steps
+        );
+    }
     if !(args.body_radius.is_finite() && args.body_radius > 0.0) {
         bail!(
             "--body-radius must be a positive number of metres, got {}",

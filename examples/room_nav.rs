@@ -173,8 +173,22 @@ fn room_field(
 
 fn main() -> Result<()> {
     let args = Args::parse();
-    if args.rooms == 0 || args.rooms > 1000 || args.pairs > 10_000 || args.samples == 0 {
-        bail!("--rooms 1..=1000, --pairs up to 10000 and --samples >= 1");
+    if args.rooms == 0 || args.rooms > 1000 || args.pairs == 0 || args.pairs > 10_000 {
+        bail!(
+            "--rooms must be in 1..=1000 and --pairs in 1..=10000 (got {} and {})",
+            args.rooms,
+            args.pairs
+        );
+    }
+    if args.samples == 0 || args.samples > 1_000_000 || args.seed.checked_add(args.rooms).is_none()
+    {
+        bail!("--samples must be in 1..=1000000 and --seed + --rooms fit in 64 bits");
+    }
+    if args.field_steps == 0 || args.field_steps > 10_000_000 {
+        bail!(
+            "--field-steps must be in 1..=10000000 (got {}): an untrained field is no field",
+            args.field_steps
+        );
     }
     for (flag, b) in [("--budget", args.budget), ("--sit-budget", args.sit_budget)] {
         if !(b.is_finite() && b > 0.0 && b <= 10_000.0) {

@@ -11,7 +11,7 @@
 
 use std::path::PathBuf;
 
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
 use clap::Parser;
 use envfield::eikonal::FastMarching;
 use envfield::grid::{Maze, MoveRule, SplitMix64};
@@ -56,6 +56,9 @@ struct Args {
     /// Only evaluate the weights at --out.
     #[arg(long)]
     eval_only: bool,
+    /// Checkpoint every N steps (an interrupted run loses at most that many).
+    #[arg(long, default_value_t = 100)]
+    every: u64,
     /// Seed of the augmentation, the weights and the batches.
     #[arg(long, default_value_t = 0)]
     seed: u64,
@@ -63,6 +66,12 @@ struct Args {
 
 fn train(args: &Args) -> Result<()> {
     let ckpt = PathBuf::from(format!("{}.ckpt", args.out.display()));
+    if args.resume && !ckpt.is_file() {
+        bail!(
+            "--resume: no checkpoint at {} (a run without --resume starts from step 0)",
+            ckpt.display()
+        );
+    }
     let t0 = std::time::Instant::now();
     let data = training_maps(0..args.rooms as u64, args.goals_per_room, args.seed)?;
     let validation = training_maps(2_000_000..2_000_064, 1, args.seed)?;
@@ -77,7 +86,7 @@ fn train(args: &Args) -> Result<()> {
         "birdseye rooms {} x {} goals, seed {}, resolution {RESOLUTION} m, body {BODY} m",
         args.rooms, args.goals_per_room, args.seed
     );
-    let mut trainer = match args.resume && ckpt.exists() {
+    let mut trainer = match args.resume {
         true => {
             let mut t = Trainer::resume(&ckpt)?;
             if let DataCheck::Unrecorded = t.continue_with_data(described, false)? {
@@ -103,7 +112,7 @@ fn train(args: &Args) -> Result<()> {
                 queries_per_item: 256,
                 steps: args.steps,
                 seed: args.seed,
-                checkpoint_every: 500,
+                checkpoint_every: args.every,
                 validate_every: 500,
                 validation_samples: 64,
                 ema_decay: 0.99,
@@ -205,6 +214,27 @@ fn eval(args: &Args) -> Result<()> {
 
 fn main() -> Result<()> {
     let args = Args::parse();
+    if args.rooms == 0 || args.rooms > 100_000 || args.eval_rooms == 0 || args.eval_rooms > 100_000
+    {
+        bail!(
+            "--rooms and --eval-rooms must be in 1..=100000 (got {} and {})",
+            args.rooms,
+            args.eval_rooms
+        );
+    }
+    if args.goals_per_room == 0 || args.goals_per_room > 1000 {
+        bail!(
+            "--goals-per-room must be in 1..=1000 (got {})",
+            args.goals_per_room
+        );
+    }
+    // A run that would take no step writes no weights: a user's trained file stays as it is.
+    if !args.eval_only && args.steps == 0 {
+        bail!(
+            "--steps 0 trains nothing ({} is left as it is; --eval-only measures it)",
+            args.out.display()
+        );
+    }
     envfield::grid::check_writable(&args.out)?;
     if !args.eval_only {
         train(&args)?;

@@ -96,10 +96,27 @@ fn main() -> Result<()> {
     let ckpt = PathBuf::from(format!("{}.ckpt", args.out.display()));
     envfield::grid::check_writable(&args.out)?;
     envfield::grid::check_writable(&ckpt)?;
+    // A run that would take no step writes no weights: a user's trained file stays as it is.
+    if args.resume.is_none() && args.steps == 0 {
+        bail!(
+            "--steps 0 trains nothing: a fresh run takes at least one step ({} is left as it is)",
+            args.out.display()
+        );
+    }
     let mut trainer = match &args.resume {
         Some(p) => {
-            let mut t = VaeTrainer::resume(p)?;
+            let mut t = VaeTrainer::resume(p)
+                .with_context(|| format!("--resume {}: no checkpoint to resume", p.display()))?;
             eprintln!("resumed {} at step {}", p.display(), t.step());
+            if args.steps <= t.step() {
+                bail!(
+                    "--steps {} trains nothing: {} is at step {} already ({} is left as it is)",
+                    args.steps,
+                    p.display(),
+                    t.step(),
+                    args.out.display()
+                );
+            }
             t.set_steps(args.steps);
             t
         }

@@ -4,6 +4,7 @@
 # BIN_DIR holds built example binaries (target/release/examples); SCRATCH_DIR is written to.
 # Prints one line per case: id, exit status, the last line printed (tab-separated). Each case
 # runs under a time limit and a 6 GB address-space limit, so an unbounded allocation aborts.
+# ONLY=36 runs only the cases of issue 36 (the entry points added since the first sweep).
 BIN=$(cd "$1" && pwd); T=$2; mkdir -p "$T"; T=$(cd "$T" && pwd)
 cd "$(dirname "$0")/.."
 export MIMALLOC_PURGE_DELAY=-1 RUST_BACKTRACE=0
@@ -24,6 +25,7 @@ n=2000
 rows=['S'+'.'*(n-1)]+['.'*n for _ in range(n-2)]+['.'*(n-1)+'G']
 open('$T/big.txt','w').write('\n'.join(rows)+'\n')"
 run() { id=$1; shift; lim=$1; shift; out=$( (ulimit -v 6000000; timeout $lim "$@") 2>&1 ); rc=$?; last=$(printf '%s' "$out" | grep -v '^\s*$' | grep -v "at \./\|^ *[0-9]*: \|^stack backtrace\|note: run with" | tail -1 | cut -c1-150); printf '%s\t%s\t%s\n' "$id" "$rc" "$last"; }
+if [ "${ONLY:-}" != 36 ]; then
 run 1 60 $BIN/train_maze --size 8 --mazes 0 --steps 2 --out $T/m.safetensors
 run 2a 20 $BIN/fmm $T/grid.txt --repeat 18446744073709551615
 run 2b 20 $BIN/fmm $T/grid.txt --repeat 100000000000
@@ -68,3 +70,26 @@ run 15a 20 $BIN/fmm $T/bad.png
 run 15b 20 $BIN/fmm $T/float.npy
 run 15c 60 $BIN/train_maze --size 8 --mazes 4 --steps 2 --lr=-1 --out $T/m15.safetensors
 run 16 120 $BIN/maze_nav --generator perfect --size 41 --count 20 --png $T/out.png --paths $T/paths.json
+fi
+
+# Issue 36: the room and crowd entry points.
+huge=18446744073709551615
+printf 'v 0 0 0\nv 100 0 0\nv 100 100 0\nv 0 100 0\nf 1 2 3\nf 1 3 4\nv 50 50 0\nv 51 50 0\nv 51 51 1\nf 5 6 7\n' > $T/big_room.obj
+cp models/vae.safetensors $T/good_vae.safetensors
+run 36-1 120 $BIN/train_vae --rooms 1 --steps 0 --out $T/good_vae.safetensors
+printf '36-1-kept\t%s\t%s\n' "$(cmp -s models/vae.safetensors $T/good_vae.safetensors; echo $?)" "$(cmp -s models/vae.safetensors $T/good_vae.safetensors && echo file kept || echo file replaced)"
+cp models/birdseye.safetensors $T/good_be.safetensors
+run 36-2 120 $BIN/train_birdseye --rooms 2 --eval-rooms 2 --steps 0 --out $T/good_be.safetensors
+printf '36-2-kept\t%s\t%s\n' "$(cmp -s models/birdseye.safetensors $T/good_be.safetensors; echo $?)" "$(cmp -s models/birdseye.safetensors $T/good_be.safetensors && echo file kept || echo file replaced)"
+run 36-9 60 $BIN/room_nav --pairs 0 --json --out $T/rn9
+run 36-10 120 $BIN/room_nav --field-steps 0 --json --out $T/rn10
+run 36-11 60 $BIN/birdseye_multi --seed $huge --rooms 2 --json --out $T/be11
+run 36-13 120 $BIN/train_birdseye --rooms 2 --eval-rooms 0 --steps 2 --out $T/be13.safetensors
+run 36-14a 60 $BIN/birdseye_multi --directions $huge --out $T/be14
+run 36-14b 60 $BIN/train_vae --rooms 1 --scenes $huge --out $T/v14.safetensors
+run 36-14c 60 $BIN/train_vae --rooms 1 --torsos $huge --out $T/v14.safetensors
+run 36-15 60 $BIN/train_vae --rooms 1 --scenes 16 --torsos 10000000 --out $T/v15.safetensors
+run 36-16a 60 $BIN/train_birdseye --goals-per-room $huge --out $T/be16.safetensors
+run 36-16b 60 $BIN/train_birdseye --rooms $huge --out $T/be16.safetensors
+run 36-17 60 $BIN/birdseye_multi --room $T/big_room.obj --out $T/be17
+run 36-18 60 $BIN/train_birdseye --rooms 2 --eval-rooms 2 --steps 10 --resume --out $T/be18.safetensors

@@ -218,3 +218,95 @@ fn birdseye_multi_refuses_impossible_crowds_and_bad_rooms() {
     refuses(go(&["--rooms", "0", "--json"]), "at least 1");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Issue 36, cases 1, 2, 13-16 and 18: the room and crowd trainers write no untrained weights
+/// over a user's file, refuse counts that would abort or hang, and say when there is nothing
+/// to resume.
+#[test]
+fn the_room_trainers_keep_the_file_and_refuse_absurd_counts() {
+    let dir = scratch("room-train");
+    let good = dir.join("good.safetensors");
+    let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("models/vae.safetensors");
+    std::fs::copy(&shipped, &good).unwrap();
+    let out = good.to_string_lossy().into_owned();
+    let huge = "18446744073709551615";
+    if let Some(vae) = example("train_vae") {
+        let go = |extra: &[&str]| {
+            let mut args = vec!["--rooms", "1", "--out", &out];
+            args.extend_from_slice(extra);
+            run(&vae, &args)
+        };
+        refuses(go(&["--steps", "0"]), "trains nothing");
+        let t = std::time::Instant::now();
+        refuses(go(&["--scenes", huge]), "scenes_per_step");
+        refuses(go(&["--torsos", huge]), "torsos");
+        refuses(go(&["--scenes", "16", "--torsos", "10000000"]), "1,000,000");
+        assert!(t.elapsed().as_secs() < 30, "{:?}", t.elapsed());
+        let missing = dir.join("none.ckpt").to_string_lossy().into_owned();
+        refuses(go(&["--resume", &missing]), "no checkpoint");
+    }
+    if let Some(birdseye) = example("train_birdseye") {
+        let go = |extra: &[&str]| {
+            let mut args = vec!["--out", &out];
+            args.extend_from_slice(extra);
+            run(&birdseye, &args)
+        };
+        let small = ["--rooms", "2", "--eval-rooms", "2"];
+        refuses(
+            go(&[&small[..], &["--steps", "0"]].concat()),
+            "trains nothing",
+        );
+        let t = std::time::Instant::now();
+        refuses(go(&["--rooms", "2", "--eval-rooms", "0"]), "--eval-rooms");
+        let goals = ["--goals-per-room", huge];
+        refuses(go(&[&small[..], &goals].concat()), "--goals-per-room");
+        refuses(go(&["--rooms", huge]), "--rooms");
+        let resume = ["--resume", "--steps", "10"];
+        refuses(go(&[&small[..], &resume].concat()), "no checkpoint");
+        assert!(t.elapsed().as_secs() < 30, "{:?}", t.elapsed());
+    }
+    assert_eq!(
+        std::fs::read(&good).unwrap(),
+        std::fs::read(&shipped).unwrap()
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Issue 36, cases 9-11, 14 and 17: no pairs, an untrained field, a seed range that wraps,
+/// an absurd heading count and a room a hundred metres wide are refused, not run.
+#[test]
+fn room_nav_and_birdseye_refuse_empty_runs_wrapping_seeds_and_huge_rooms() {
+    let dir = scratch("nav-crowd");
+    let out = dir.to_string_lossy().into_owned();
+    let huge = "18446744073709551615";
+    if let Some(nav) = example("room_nav") {
+        refuses(run(&nav, &["--pairs", "0", "--out", &out]), "--pairs");
+        refuses(
+            run(&nav, &["--field-steps", "0", "--out", &out]),
+            "--field-steps",
+        );
+        refuses(
+            run(&nav, &["--seed", huge, "--rooms", "2", "--out", &out]),
+            "64 bits",
+        );
+    }
+    if let Some(crowd) = example("birdseye_multi") {
+        let model = concat!(env!("CARGO_MANIFEST_DIR"), "/models/birdseye.safetensors");
+        let go = |extra: &[&str]| {
+            let mut args = vec!["--model", model, "--out", &out];
+            args.extend_from_slice(extra);
+            run(&crowd, &args)
+        };
+        refuses(go(&["--seed", huge, "--rooms", "2", "--json"]), "64 bits");
+        refuses(go(&["--directions", huge]), "--directions");
+        // A 100 x 100 m floor with a box on it.
+        let mut obj =
+            String::from("v 0 0 0\nv 100 0 0\nv 100 100 0\nv 0 100 0\nf 1 2 3\nf 1 3 4\n");
+        obj.push_str("v 50 50 0\nv 51 50 0\nv 51 51 1\nf 5 6 7\n");
+        let big = write(&dir, "big.obj", &obj);
+        let t = std::time::Instant::now();
+        refuses(go(&["--room", &big]), "more than 256");
+        assert!(t.elapsed().as_secs() < 30, "{:?}", t.elapsed());
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -259,6 +259,17 @@ impl VaeTrainConfig {
         if self.scenes_per_step == 0 || self.torsos_per_scene == 0 {
             return bad("scenes_per_step and torsos_per_scene must be at least 1".into());
         }
+        // A step's batch holds every scene's cloud and torsos: past a million torsos a step
+        // no machine this runs on has the memory, and the allocation would abort.
+        if self.scenes_per_step > 4096
+            || self.scenes_per_step.saturating_mul(self.torsos_per_scene) > 1_000_000
+        {
+            return bad(format!(
+                "scenes_per_step x torsos_per_scene: at most 4096 scenes and 1,000,000 torsos \
+                 a step (got {} x {})",
+                self.scenes_per_step, self.torsos_per_scene
+            ));
+        }
         if self.cycles == 0 {
             return bad("cycles must be at least 1".into());
         }

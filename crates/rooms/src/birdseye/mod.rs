@@ -12,7 +12,7 @@ pub use data::{changed_map, goal_cell, training_maps, walkable_map};
 pub use picture::crowd_frames;
 pub use tally::CrowdTally;
 
-use crate::Result;
+use crate::{Result, RoomsError};
 use envfield_affordance::{walk_along, AffordanceReport, PoseSequence};
 use envfield_grid::{Grid2, Point2};
 use envfield_plan::crowd::CrowdRun;
@@ -25,6 +25,10 @@ pub const RESOLUTION: f32 = 0.1;
 pub const BODY: f32 = 0.25;
 /// The map side generated rooms are padded to.
 pub const SIDE: usize = 64;
+/// The longest map side [`Floor::new`] takes (25.6 m at [`RESOLUTION`]): every person's
+/// field is predicted on the whole map at every time step, which past this size takes
+/// seconds a step.
+pub const MAX_SIDE: usize = 256;
 
 /// A room's scene, floor map and walkable map (padded to 64 x 64 when it fits).
 #[derive(Clone, Debug)]
@@ -41,8 +45,21 @@ impl Floor {
     /// The floor of `scene` for bodies of `body_radius` metres.
     ///
     /// # Errors
-    /// Errors of the floor map (an empty scene, no floor).
+    /// Errors of the floor map (an empty scene, no floor); [`RoomsError::InvalidInput`] for a
+    /// scene wider than [`MAX_SIDE`] cells.
     pub fn new(scene: Scene, body_radius: f32) -> Result<Self> {
+        if let Some(aabb) = scene.aabb() {
+            let extent = aabb.maxs - aabb.mins;
+            let cells = (extent.x.max(extent.y) / RESOLUTION).ceil();
+            if !(cells <= MAX_SIDE as f32) {
+                return Err(RoomsError::InvalidInput(format!(
+                    "the scene is {:.1} x {:.1} m: its floor map would be {cells} cells a side at \
+                     {RESOLUTION} m, more than {MAX_SIDE} (is it in centimetres or millimetres? \
+                     scale it to metres)",
+                    extent.x, extent.y
+                )));
+            }
+        }
         let map = floor_map(
             &scene,
             &FloorMapConfig {
