@@ -92,9 +92,11 @@ fn cost_summary(net: &FieldNet, sets: &[MazeSet]) -> Result<serde_json::Value> {
         diag.extend(d);
     }
     let stats = |v: &[f32]| {
-        let mean = v.iter().map(|&x| x as f64).sum::<f64>() / v.len().max(1) as f64;
-        let min = v.iter().copied().fold(f32::INFINITY, f32::min);
-        let max = v.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+        // No move has no mean, least or greatest cost: null, not 0 or infinity.
+        let any = !v.is_empty();
+        let mean = any.then(|| v.iter().map(|&x| x as f64).sum::<f64>() / v.len() as f64);
+        let min = v.iter().copied().reduce(f32::min);
+        let max = v.iter().copied().reduce(f32::max);
         serde_json::json!({"moves": v.len(), "mean": mean, "min": min, "max": max})
     };
     Ok(serde_json::json!({"orthogonal": stats(&orth), "diagonal": stats(&diag)}))

@@ -84,6 +84,7 @@ printf '36-2-kept\t%s\t%s\n' "$(cmp -s models/birdseye.safetensors $T/good_be.sa
 run 36-9 60 $BIN/room_nav --pairs 0 --json --out $T/rn9
 run 36-10 120 $BIN/room_nav --field-steps 0 --json --out $T/rn10
 run 36-11 60 $BIN/birdseye_multi --seed $huge --rooms 2 --json --out $T/be11
+run 36-12 120 $BIN/suite --seed $huge --count 2 --no-vin --only "perfect 21"
 run 36-13 120 $BIN/train_birdseye --rooms 2 --eval-rooms 0 --steps 2 --out $T/be13.safetensors
 run 36-14a 60 $BIN/birdseye_multi --directions $huge --out $T/be14
 run 36-14b 60 $BIN/train_vae --rooms 1 --scenes $huge --out $T/v14.safetensors
