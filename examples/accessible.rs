@@ -13,8 +13,7 @@
 //! accessible voxel, for one goal) and `summary.json`. `--rooms N` evaluates N generated
 //! rooms of seeds 10000.. (training used 0..200) against two controls, an untrained VAE and
 //! uniform samples in the room's box; its last line is one JSON object. The default VAE is the
-//! gated local one (`models/vae_gated.safetensors`); `--vae models/vae.safetensors` is the
-//! paper's.
+//! gated one (`models/vae_gated.safetensors`); `--vae models/vae.safetensors` is the paper's.
 
 use anyhow::{bail, Context, Result};
 use clap::Parser;
@@ -24,7 +23,9 @@ use envfield::rooms::{
     AccessibleRegion, ExactField3, Field3Config, Field3Report, LearnedField3, RegionConfig,
     RegionQuality,
 };
-use envfield::scene::{generate_room, Room, RoomConfig, Scene, TriangleMesh};
+use envfield::scene::{
+    generate_room, read_scene, ImportConfig, Room, RoomConfig, Scene, Units, UpAxis,
+};
 use envfield::vae::{Cvae, Gate, SampleOptions};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
@@ -40,6 +41,12 @@ struct Args {
     /// z up).
     #[arg(long)]
     scene: Option<PathBuf>,
+    /// The scene file's up axis: z, or y (glTF, game levels).
+    #[arg(long, default_value = "z")]
+    up: UpAxis,
+    /// The scene file's units: m, cm, mm, or metres per unit.
+    #[arg(long, default_value = "m")]
+    units: Units,
     /// Seed of the generated room (10000 and up were never trained on).
     #[arg(long, default_value_t = 10_000)]
     seed: u64,
@@ -92,9 +99,9 @@ struct Args {
 }
 
 fn region_config(args: &Args) -> RegionConfig {
-    let d = RegionConfig::default();
-    let torso_radius = args.torso_radius.unwrap_or(d.torso_radius);
-    RegionConfig { torso_radius, ..d }
+    let mut config = RegionConfig::default();
+    config.torso_radius = args.torso_radius.unwrap_or(config.torso_radius);
+    config
 }
 
 /// The learned field's training config: `Field3Config`'s defaults under the `--field-*` flags.
@@ -112,15 +119,7 @@ fn field_config(args: &Args, seed: u64) -> Field3Config {
     }
 }
 
-fn vae_file(args: &Args) -> PathBuf {
-    args.vae.clone().unwrap_or_else(|| {
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("models/vae_gated.safetensors")
-    })
-}
-
-/// `args.samples` torsos of `vae` in `scene`: drawn as `vae` draws them, or next to `anchors`'
-/// samples (moved by the local VAE's jitter) when `--anchors-from` is given. A gated VAE's
-/// gate is off with `--no-gate` or `gate_off`.
+/// `args.samples` torsos of `vae` (next to `anchors`' samples with `--anchors-from`).
 fn draw(
     args: &Args,
     vae: &Cvae,
@@ -141,11 +140,9 @@ fn draw(
 }
 
 fn progress(len: u64, what: &str) -> Result<ProgressBar> {
+    let style = "{msg:>24} {bar:30} {pos}/{len} {elapsed_precise} (eta {eta})";
     let bar = ProgressBar::new(len).with_message(what.to_string());
-    bar.set_style(ProgressStyle::with_template(
-        "{msg:>24} {bar:30} {pos}/{len} {elapsed_precise} (eta {eta})",
-    )?);
-    Ok(bar)
+    Ok(bar.with_style(ProgressStyle::with_template(style)?))
 }
 
 fn one(args: &Args, vae: &Cvae) -> Result<()> {
@@ -153,7 +150,11 @@ fn one(args: &Args, vae: &Cvae) -> Result<()> {
         .with_context(|| format!("creating {}", args.out.display()))?;
     envfield::grid::check_writable(args.out.join("summary.json"))?;
     let (scene, room): (Scene, Option<Room>) = match &args.scene {
-        Some(f) => (Scene::from_mesh("scene", &TriangleMesh::read(f)?)?, None),
+        Some(f) => {
+            let (scene, report) = read_scene(f, &ImportConfig::new(args.up, args.units))?;
+            eprintln!("{}: {report}", f.display());
+            (scene, None)
+        }
         None => {
             let room = generate_room(&RoomConfig::default(), args.seed)?;
             (room.scene.clone(), Some(room))
@@ -273,10 +274,8 @@ fn many(args: &Args, vae: &Cvae, rooms: u64) -> Result<()> {
 
 /// The VAE of `--anchors-from`, if any.
 fn anchor_vae(args: &Args) -> Result<Option<Cvae>> {
-    args.anchors_from
-        .as_ref()
-        .map(|f| Cvae::load(f).with_context(|| format!("loading the VAE {}", f.display())))
-        .transpose()
+    let load = |f: &PathBuf| Cvae::load(f).with_context(|| format!("loading {}", f.display()));
+    args.anchors_from.as_ref().map(load).transpose()
 }
 
 fn main() -> Result<()> {
@@ -284,7 +283,8 @@ fn main() -> Result<()> {
     if args.samples == 0 || args.samples > 1_000_000 {
         bail!("--samples must be in 1..=1000000 (got {})", args.samples);
     }
-    let file = vae_file(&args);
+    let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("models/vae_gated.safetensors");
+    let file = args.vae.clone().unwrap_or(shipped);
     let vae = Cvae::load(&file).with_context(|| {
         format!(
             "loading the VAE {} (train one with the command in models/README.md)",

@@ -27,7 +27,7 @@ use envfield::plan::crowd::{
     orca_crowd, random_trips, shortest_lengths, walk_crowd, CrowdConfig, OrcaConfig,
 };
 use envfield::rooms::birdseye::{crowd_frames, CrowdTally, Floor, RESOLUTION};
-use envfield::scene::{generate_room, RoomConfig, Scene, TriangleMesh};
+use envfield::scene::{generate_room, read_scene, ImportConfig, RoomConfig, Units, UpAxis};
 
 #[global_allocator]
 static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
@@ -45,6 +45,12 @@ struct Args {
     /// z up, the floor at its lowest point).
     #[arg(long)]
     room: Option<PathBuf>,
+    /// The scene file's up axis: z, or y (glTF, game levels).
+    #[arg(long, default_value = "z")]
+    up: UpAxis,
+    /// The scene file's units: m, cm, mm, or metres per unit.
+    #[arg(long, default_value = "m")]
+    units: Units,
     /// Run a batch over this many generated rooms (seeds from --seed) and print the figures.
     #[arg(long)]
     rooms: Option<usize>,
@@ -177,7 +183,12 @@ fn one_room(args: &Args, model: &FieldNet, config: &CrowdConfig) -> Result<()> {
         .with_context(|| format!("creating {}", args.out.display()))?;
     envfield::grid::check_writable(args.out.join("crowd.json"))?;
     let scene = match &args.room {
-        Some(file) => Scene::from_mesh("scene", &TriangleMesh::read(file)?)?,
+        Some(file) => {
+            let import = ImportConfig::new(args.up, args.units);
+            let (scene, report) = read_scene(file, &import)?;
+            eprintln!("{}: {report}", file.display());
+            scene
+        }
         None => generate_room(&RoomConfig::birdseye(), args.seed)?.scene,
     };
     let floor = Floor::new(scene, args.body_radius)?;

@@ -21,8 +21,8 @@ use envfield::grid::{Cell2, HeatMapStyle, MoveRule};
 use envfield::plan::descend;
 use envfield::scene::nalgebra::{distance, Point3};
 use envfield::scene::{
-    floor_map, generate_room, sample_surface, write_point_cloud, write_polyline_obj,
-    FloorMapConfig, RoomConfig, Scene, TriangleMesh,
+    floor_map, generate_room, read_scene, sample_surface, write_point_cloud, write_polyline_obj,
+    FloorMapConfig, ImportConfig, RoomConfig, Scene, Units, UpAxis,
 };
 
 #[global_allocator]
@@ -50,6 +50,12 @@ struct Args {
     /// z up, the floor at its lowest point).
     #[arg(long)]
     scene: Option<PathBuf>,
+    /// The scene file's up axis: z, or y (glTF, game levels).
+    #[arg(long, default_value = "z")]
+    up: UpAxis,
+    /// The scene file's units: m, cm, mm, or metres per unit.
+    #[arg(long, default_value = "m")]
+    units: Units,
 }
 
 fn main() -> Result<()> {
@@ -61,7 +67,9 @@ fn main() -> Result<()> {
     // The scene, its size in metres and the kinds of its furniture (none known for a file).
     let (scene, size, kinds): (Scene, [f32; 2], Vec<String>) = match &args.scene {
         Some(file) => {
-            let scene = Scene::from_mesh("scene", &TriangleMesh::read(file)?)?;
+            let import = ImportConfig::new(args.up, args.units);
+            let (scene, report) = read_scene(file, &import)?;
+            eprintln!("{}: {report}", file.display());
             let aabb = scene.aabb().context("the scene is empty")?;
             let extent = aabb.maxs - aabb.mins;
             (scene, [extent.x, extent.y], Vec::new())

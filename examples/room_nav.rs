@@ -33,7 +33,7 @@ use envfield::rooms::{
     point, region_key, sample_region, train_field3, AccessibleRegion, Field3Config,
 };
 use envfield::scene::nalgebra::Point3;
-use envfield::scene::{generate_room, write_polyline_obj, Scene, TriangleMesh};
+use envfield::scene::{generate_room, read_scene, write_polyline_obj, ImportConfig, Units, UpAxis};
 use envfield::vae::Cvae;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
@@ -52,6 +52,12 @@ struct Args {
     /// A scene to read instead of a generated room (OBJ or PLY, metres, z up).
     #[arg(long)]
     scene: Option<PathBuf>,
+    /// The scene file's up axis: z, or y (glTF, game levels).
+    #[arg(long, default_value = "z")]
+    up: UpAxis,
+    /// The scene file's units: m, cm, mm, or metres per unit.
+    #[arg(long, default_value = "m")]
+    units: Units,
     /// Seed of the generated room (10000 and up were never seen by the VAE).
     #[arg(long, default_value_t = SHIPPED_ROOM)]
     seed: u64,
@@ -210,7 +216,15 @@ fn main() -> Result<()> {
     for k in 0..args.rooms {
         let seed = args.seed + k;
         let (scene, room) = match &args.scene {
-            Some(f) => (Scene::from_mesh("scene", &TriangleMesh::read(f)?)?, None),
+            Some(f) => (
+                {
+                    let import = ImportConfig::new(args.up, args.units);
+                    let (scene, report) = read_scene(f, &import)?;
+                    eprintln!("{}: {report}", f.display());
+                    scene
+                },
+                None,
+            ),
             None => {
                 let r = generate_room(&envfield::scene::RoomConfig::default(), seed)?;
                 (r.scene.clone(), Some(r))

@@ -310,3 +310,79 @@ fn room_nav_and_birdseye_refuse_empty_runs_wrapping_seeds_and_huge_rooms() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Issue 36, cases 3 and 8 (and the import of the real-scenes issue): a scene whose floor is
+/// 1 m up and a kilometre from the origin, or written y-up, walks as the same scene at the
+/// origin does once imported; read with the wrong up axis, it warns naming `--up y`.
+#[test]
+fn room_scenes_are_moved_onto_their_floor_and_turned_upright() {
+    let Some(room) = example("room") else { return };
+    let dir = scratch("import");
+    // A 5 x 4 m floor and a 1 x 1 x 0.8 m box, as (x, y, z) corners of quads.
+    let quads: [[[f32; 3]; 4]; 6] = [
+        [[0., 0., 0.], [5., 0., 0.], [5., 4., 0.], [0., 4., 0.]],
+        [[2., 1., 0.8], [3., 1., 0.8], [3., 2., 0.8], [2., 2., 0.8]],
+        [[2., 1., 0.], [3., 1., 0.], [3., 1., 0.8], [2., 1., 0.8]],
+        [[2., 2., 0.], [3., 2., 0.], [3., 2., 0.8], [2., 2., 0.8]],
+        [[2., 1., 0.], [2., 2., 0.], [2., 2., 0.8], [2., 1., 0.8]],
+        [[3., 1., 0.], [3., 2., 0.], [3., 2., 0.8], [3., 1., 0.8]],
+    ];
+    let obj = |f: &dyn Fn([f32; 3]) -> [f32; 3]| {
+        let mut text = String::new();
+        for (k, q) in quads.iter().enumerate() {
+            for v in q {
+                let [x, y, z] = f(*v);
+                text.push_str(&format!("v {x} {y} {z}\n"));
+            }
+            let b = 4 * k + 1;
+            text.push_str(&format!(
+                "f {} {} {}\nf {} {} {}\n",
+                b,
+                b + 1,
+                b + 2,
+                b,
+                b + 2,
+                b + 3
+            ));
+        }
+        text
+    };
+    let origin = write(&dir, "origin.obj", &obj(&|v| v));
+    let far = write(
+        &dir,
+        "far.obj",
+        &obj(&|[x, y, z]| [x + 1000., y + 2000., z + 1.]),
+    );
+    let y_up = write(
+        &dir,
+        "y_up.obj",
+        &obj(&|[x, y, z]| [x + 1000., z + 1., -y - 2000.]),
+    );
+    let out = dir.join("out").to_string_lossy().into_owned();
+    let valid = |args: &[&str]| {
+        let done = run(&room, &[args, &["--out", &out]].concat());
+        let stdout = String::from_utf8_lossy(&done.stdout).into_owned();
+        assert!(
+            done.status.success(),
+            "{}",
+            String::from_utf8_lossy(&done.stderr)
+        );
+        let line = stdout.lines().last().unwrap_or_default().to_string();
+        let key = "\"valid_percent\":";
+        let at = line.find(key).expect("valid_percent") + key.len();
+        let value: String = line[at..]
+            .chars()
+            .take_while(|c| *c != ',' && *c != '}')
+            .collect();
+        (value, String::from_utf8_lossy(&done.stderr).into_owned())
+    };
+    let (at_origin, _) = valid(&["--scene", &origin]);
+    let (moved, report) = valid(&["--scene", &far]);
+    assert_eq!(moved, at_origin, "{report}");
+    assert!(report.contains("floor found at z = 1.000"), "{report}");
+    let (_, warned) = valid(&["--scene", &y_up]);
+    assert!(warned.contains("--up y"), "{warned}");
+    let (upright, _) = valid(&["--scene", &y_up, "--up", "y"]);
+    assert_eq!(upright, at_origin);
+    std::fs::remove_dir_all(&dir).ok();
+}

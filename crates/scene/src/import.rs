@@ -94,6 +94,13 @@ pub struct ImportConfig {
     pub units: Units,
 }
 
+impl ImportConfig {
+    /// A file with `up` as its up axis, in `units`.
+    pub fn new(up: UpAxis, units: Units) -> Self {
+        Self { up, units }
+    }
+}
+
 /// What [`import_mesh`] read and did, in metres and the library's frame.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ImportReport {
@@ -172,7 +179,7 @@ pub fn import_mesh(
     let mut warnings = Vec::new();
     // Flat surfaces by the axis they face: a scene is mostly floors, seats and table tops.
     let mut facing = [0f32; 3];
-    let mut floor_bins: Vec<(i64, f32)> = Vec::new();
+    let mut floor_bins: Vec<(i64, f32, f32)> = Vec::new();
     for t in &out.triangles {
         let [a, b, c] = t.map(|i| out.vertices[i as usize]);
         let n: Vector3<f32> = (b - a).cross(&(c - a));
@@ -189,7 +196,7 @@ pub fn import_mesh(
         // An upward (or, wound the other way, downward) horizontal face: a floor candidate.
         if u.z.abs() > 0.95 {
             let z = (a.z + b.z + c.z) / 3.0;
-            floor_bins.push(((z / 0.02).floor() as i64, area));
+            floor_bins.push(((z / 0.02).floor() as i64, area, z));
         }
     }
     // In the library's frame, most flat surfaces should face up.
@@ -238,8 +245,23 @@ pub fn import_mesh(
     Ok((out, report))
 }
 
-/// The lowest 2 cm bin holding at least a tenth of the horizontal area, as a height.
-fn floor_height(bins: &mut [(i64, f32)]) -> Option<f32> {
+/// A scene read from an OBJ or PLY file and imported with `config` ([`import_mesh`]), as one
+/// object of kind [`ObjectKind::Mesh`](crate::ObjectKind), with the import's report.
+///
+/// # Errors
+/// The errors of [`TriangleMesh::read`], [`import_mesh`] and [`Scene::from_mesh`](crate::Scene).
+pub fn read_scene(
+    path: impl AsRef<std::path::Path>,
+    config: &ImportConfig,
+) -> Result<(crate::Scene, ImportReport)> {
+    let mesh = TriangleMesh::read(path)?;
+    let (mesh, report) = import_mesh(&mesh, config)?;
+    Ok((crate::Scene::from_mesh("scene", &mesh)?, report))
+}
+
+/// The lowest 2 cm bin holding at least a tenth of the horizontal area: its area-weighted
+/// mean height.
+fn floor_height(bins: &mut [(i64, f32, f32)]) -> Option<f32> {
     bins.sort_by_key(|b| b.0);
     let total: f32 = bins.iter().map(|b| b.1).sum();
     if total <= 0.0 {
@@ -248,13 +270,14 @@ fn floor_height(bins: &mut [(i64, f32)]) -> Option<f32> {
     let mut k = 0;
     while k < bins.len() {
         let bin = bins[k].0;
-        let (mut area, mut j) = (0.0, k);
+        let (mut area, mut moment, mut j) = (0.0, 0.0, k);
         while j < bins.len() && bins[j].0 == bin {
             area += bins[j].1;
+            moment += bins[j].1 * bins[j].2;
             j += 1;
         }
         if area >= 0.1 * total {
-            return Some((bin as f32 + 0.5) * 0.02);
+            return Some(moment / area);
         }
         k = j;
     }

@@ -41,7 +41,7 @@ mod scene;
 
 pub use error::{Result, SceneError};
 pub use floor::{floor_map, FloorMap, FloorMapConfig, MapFrame};
-pub use import::{import_mesh, ImportConfig, ImportReport, Units, UpAxis};
+pub use import::{import_mesh, read_scene, ImportConfig, ImportReport, Units, UpAxis};
 pub use mesh::{write_point_cloud, write_polyline_obj, TriangleMesh};
 pub use room::{generate_room, Furniture, Room, RoomConfig};
 pub use sample::{sample_surface, voxelize, VoxelFrame, MAX_SURFACE_POINTS};

@@ -51,7 +51,7 @@ impl Floor {
         if let Some(aabb) = scene.aabb() {
             let extent = aabb.maxs - aabb.mins;
             let cells = (extent.x.max(extent.y) / RESOLUTION).ceil();
-            if !(cells <= MAX_SIDE as f32) {
+            if cells.is_nan() || cells > MAX_SIDE as f32 {
                 return Err(RoomsError::InvalidInput(format!(
                     "the scene is {:.1} x {:.1} m: its floor map would be {cells} cells a side at \
                      {RESOLUTION} m, more than {MAX_SIDE} (is it in centimetres or millimetres? \
