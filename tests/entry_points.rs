@@ -384,5 +384,25 @@ fn room_scenes_are_moved_onto_their_floor_and_turned_upright() {
     assert!(warned.contains("--up y"), "{warned}");
     let (upright, _) = valid(&["--scene", &y_up, "--up", "y"]);
     assert_eq!(upright, at_origin);
+    // Case 7: the accessible region of the raised, far scene (refused as "no floor?" before).
+    if let Some(accessible) = example("accessible") {
+        let args = ["--scene", &far, "--no-field", "--json", "--samples", "2000"];
+        let done = run(&accessible, &[&args[..], &["--out", &out]].concat());
+        let stdout = String::from_utf8_lossy(&done.stdout);
+        assert!(
+            done.status.success(),
+            "{}",
+            String::from_utf8_lossy(&done.stderr)
+        );
+        let key = "\"accessible_voxels\":";
+        let at = stdout.find(key).expect("accessible_voxels") + key.len();
+        let voxels: usize = stdout[at..]
+            .chars()
+            .take_while(|c| c.is_ascii_digit())
+            .collect::<String>()
+            .parse()
+            .unwrap();
+        assert!(voxels > 500, "{voxels} voxels:\n{stdout}");
+    }
     std::fs::remove_dir_all(&dir).ok();
 }
