@@ -259,29 +259,36 @@ pub fn read_scene(
     Ok((crate::Scene::from_mesh("scene", &mesh)?, report))
 }
 
-/// The lowest 2 cm bin holding at least a tenth of the horizontal area: its area-weighted
-/// mean height.
+/// The floor's height from the horizontal faces, binned every 2 cm: the lowest band holding
+/// at least a tenth of the horizontal area, or, when that band is the underside of a slab (a
+/// band within 0.5 m above it holds at least half as much), the highest such band: the side
+/// one stands on. A band's height is its faces' area-weighted mean.
 fn floor_height(bins: &mut [(i64, f32, f32)]) -> Option<f32> {
     bins.sort_by_key(|b| b.0);
     let total: f32 = bins.iter().map(|b| b.1).sum();
     if total <= 0.0 {
         return None;
     }
-    let mut k = 0;
-    while k < bins.len() {
-        let bin = bins[k].0;
-        let (mut area, mut moment, mut j) = (0.0, 0.0, k);
-        while j < bins.len() && bins[j].0 == bin {
-            area += bins[j].1;
-            moment += bins[j].1 * bins[j].2;
-            j += 1;
+    // Bands as (bin, area, mean height), lowest first.
+    let mut bands: Vec<(i64, f32, f32)> = Vec::new();
+    for &(bin, area, z) in bins.iter() {
+        match bands.last_mut() {
+            Some(last) if last.0 == bin => {
+                last.2 = (last.2 * last.1 + z * area) / (last.1 + area);
+                last.1 += area;
+            }
+            _ => bands.push((bin, area, z)),
         }
-        if area >= 0.1 * total {
-            return Some(moment / area);
-        }
-        k = j;
     }
-    None
+    let first = bands.iter().position(|b| b.1 >= 0.1 * total)?;
+    let (_, area, z) = bands[first];
+    let top = bands[first..]
+        .iter()
+        .take_while(|b| b.2 - z <= 0.5)
+        .filter(|b| b.1 >= 0.5 * area)
+        .last()
+        .map_or(z, |b| b.2);
+    Some(top)
 }
 
 fn bounds(points: &[Point3<f32>]) -> (Point3<f32>, Point3<f32>) {
