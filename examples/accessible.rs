@@ -19,9 +19,9 @@ use anyhow::{bail, Context, Result};
 use clap::Parser;
 use envfield::rooms::pictures::write_field_view;
 use envfield::rooms::{
-    draw_torsos, drawn_summary, middle_goal, region_quality, train_field3, uniform_in_room,
-    AccessibleRegion, ExactField3, Field3Config, Field3Report, LearnedField3, RegionConfig,
-    RegionQuality,
+    check_sample_density, draw_torsos, drawn_summary, middle_goal, region_quality, train_field3,
+    uniform_in_room, AccessibleRegion, ExactField3, Field3Config, Field3Report, LearnedField3,
+    RegionConfig, RegionQuality,
 };
 use envfield::scene::{
     generate_room, read_scene, ImportConfig, Room, RoomConfig, Scene, Units, UpAxis,
@@ -106,17 +106,11 @@ fn region_config(args: &Args) -> RegionConfig {
 
 /// The learned field's training config: `Field3Config`'s defaults under the `--field-*` flags.
 fn field_config(args: &Args, seed: u64) -> Field3Config {
-    let d = Field3Config::default();
-    Field3Config {
-        steps: args.field_steps,
-        seed,
-        mlp: envfield::nets::MlpConfig {
-            fourier: args.field_fourier.unwrap_or(d.mlp.fourier),
-            hidden: args.field_hidden.unwrap_or(d.mlp.hidden),
-            ..d.mlp
-        },
-        ..d
-    }
+    let mut c = Field3Config::default();
+    (c.steps, c.seed) = (args.field_steps, seed);
+    c.mlp.fourier = args.field_fourier.unwrap_or(c.mlp.fourier);
+    c.mlp.hidden = args.field_hidden.unwrap_or(c.mlp.hidden);
+    c
 }
 
 /// `args.samples` torsos of `vae` (next to `anchors`' samples with `--anchors-from`).
@@ -153,6 +147,9 @@ fn one(args: &Args, vae: &Cvae) -> Result<()> {
         Some(f) => {
             let (scene, report) = read_scene(f, &ImportConfig::new(args.up, args.units))?;
             eprintln!("{}: {report}", f.display());
+            if let Some(w) = check_sample_density(&scene, args.samples)? {
+                eprintln!("warning: {w}");
+            }
             (scene, None)
         }
         None => {

@@ -30,7 +30,8 @@ use envfield::rooms::harness::{pairs, run_pair, PairKind, PlannerKind};
 use envfield::rooms::pictures::{room_view, top_view};
 use envfield::rooms::tables::{finite_mean, Tally};
 use envfield::rooms::{
-    point, region_key, sample_region, train_field3, AccessibleRegion, Field3Config,
+    check_sample_density, point, region_key, sample_region, train_field3, AccessibleRegion,
+    Field3Config,
 };
 use envfield::scene::nalgebra::Point3;
 use envfield::scene::{generate_room, read_scene, write_polyline_obj, ImportConfig, Units, UpAxis};
@@ -221,6 +222,9 @@ fn main() -> Result<()> {
                     let import = ImportConfig::new(args.up, args.units);
                     let (scene, report) = read_scene(f, &import)?;
                     eprintln!("{}: {report}", f.display());
+                    if let Some(w) = check_sample_density(&scene, args.samples)? {
+                        eprintln!("warning: {w}");
+                    }
                     scene
                 },
                 None,

@@ -406,3 +406,43 @@ fn room_scenes_are_moved_onto_their_floor_and_turned_upright() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Issue 36, cases 5 and 6: a region drawn from torso samples does not scale to a 100 x 100 m
+/// floor (a game level's size), and says so at once instead of returning a few specks; a floor
+/// the samples cover thinly gets a warning naming `--samples`.
+#[test]
+fn accessible_refuses_floors_too_large_and_warns_of_thin_samples() {
+    let Some(accessible) = example("accessible") else {
+        return;
+    };
+    let dir = scratch("density");
+    let out = dir.join("out").to_string_lossy().into_owned();
+    let floor = |side: f32| {
+        format!(
+            "v 0 0 0\nv {side} 0 0\nv {side} {side} 0\nv 0 {side} 0\nf 1 2 3\nf 1 3 4\n\
+             v 1 1 0\nv 2 1 0\nv 2 2 0.8\nf 5 6 7\n"
+        )
+    };
+    let big = write(&dir, "big.obj", &floor(100.0));
+    let t = std::time::Instant::now();
+    let args = ["--scene", &big, "--no-field", "--out", &out];
+    refuses(run(&accessible, &args), "not supported yet");
+    assert!(t.elapsed().as_secs() < 10, "{:?}", t.elapsed());
+    let mid = write(&dir, "mid.obj", &floor(20.0));
+    let done = run(
+        &accessible,
+        &[
+            "--scene",
+            &mid,
+            "--no-field",
+            "--samples",
+            "500",
+            "--json",
+            "--out",
+            &out,
+        ],
+    );
+    let stderr = String::from_utf8_lossy(&done.stderr);
+    assert!(stderr.contains("set --samples 96000"), "{stderr}");
+    std::fs::remove_dir_all(&dir).ok();
+}

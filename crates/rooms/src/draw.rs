@@ -71,6 +71,46 @@ pub fn sample_region(
     AccessibleRegion::from_drawn(scene, &drawn, &RegionConfig::default())
 }
 
+/// Torso samples per square metre of floor the shipped setup draws (6000 in a generated room
+/// of about 25 m²): fewer leave the region in specks.
+pub const SAMPLES_PER_M2: f32 = 240.0;
+
+/// The most torso samples a region is drawn from.
+pub const MAX_SAMPLES: usize = 1_000_000;
+
+/// Whether `samples` torso draws can cover `scene`'s floor (its x-y box): `Ok(None)` when they
+/// reach a quarter of [`SAMPLES_PER_M2`], `Ok(Some(warning))` naming `--samples` and the
+/// count that would when they do not, and an error when even [`MAX_SAMPLES`] would not (a
+/// game level or a building: a region drawn from samples does not scale to it).
+///
+/// # Errors
+/// [`RoomsError::InvalidInput`] for a scene whose floor needs more than [`MAX_SAMPLES`], or
+/// an empty scene.
+pub fn check_sample_density(scene: &Scene, samples: usize) -> Result<Option<String>> {
+    let aabb = scene
+        .aabb()
+        .ok_or_else(|| RoomsError::InvalidInput("the scene is empty".into()))?;
+    let extent = aabb.maxs - aabb.mins;
+    let area = (extent.x * extent.y).max(1.0);
+    let needed = (area * SAMPLES_PER_M2).ceil();
+    if needed > MAX_SAMPLES as f32 {
+        return Err(RoomsError::InvalidInput(format!(
+            "the scene's floor spans {:.0} x {:.0} m ({area:.0} m²): a region drawn from torso \
+             samples needs about {needed:.0} of them ({SAMPLES_PER_M2} a square metre), more than \
+             the {MAX_SAMPLES} allowed; scenes this large are not supported yet (is it in \
+             centimetres? --units cm)",
+            extent.x, extent.y
+        )));
+    }
+    let density = samples as f32 / area;
+    Ok((density < 0.25 * SAMPLES_PER_M2).then(|| {
+        format!(
+            "{samples} samples over {area:.0} m² of floor are {density:.0} a square metre: the \
+             region will fall apart in specks (set --samples {needed:.0})"
+        )
+    }))
+}
+
 /// A goal for pictures: the kept sample nearest the region's middle in x-y.
 pub fn middle_goal(region: &AccessibleRegion) -> Point3m {
     let n = region.samples.len() as f32;

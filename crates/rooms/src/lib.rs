@@ -49,7 +49,10 @@ pub mod region;
 pub mod tables;
 mod torsos;
 
-pub use draw::{draw_torsos, middle_goal, region_key, sample_region, vae_cloud};
+pub use draw::{
+    check_sample_density, draw_torsos, middle_goal, region_key, sample_region, vae_cloud,
+    MAX_SAMPLES, SAMPLES_PER_M2,
+};
 pub use error::{Result, RoomsError};
 pub use field3::{ExactField3, LearnedField3};
 pub use field3_train::{train_field3, Field3Config, Field3Report};
