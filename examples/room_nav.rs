@@ -116,6 +116,9 @@ fn root() -> &'static Path {
 /// The room's learned field: `--field`, a kept one in `--fields`, the shipped one, or one
 /// trained now (kept in `--fields`, saved to `--save-field`); its training seconds when
 /// trained.
+/// The metadata key of a kept field's region fingerprint and training steps.
+const REGION_TAG: &str = "room_nav.region";
+
 fn room_field(
     args: &Args,
     k: u64,
@@ -123,13 +126,12 @@ fn room_field(
     region: &AccessibleRegion,
 ) -> Result<(FieldNet, Option<f64>)> {
     let generated = args.scene.is_none();
-    let cached = args.fields.as_ref().filter(|_| generated).map(|d| {
-        let key = region_key(region);
-        d.join(format!(
-            "room_field_{seed}_{key:016x}_{}.safetensors",
-            args.field_steps
-        ))
-    });
+    let key = format!("{:016x}_{}", region_key(region), args.field_steps);
+    let cached = args
+        .fields
+        .as_ref()
+        .filter(|_| generated)
+        .map(|d| d.join(format!("room_field_{seed}_{key}.safetensors")));
     let shipped = root().join(format!("models/room_field_{seed}.safetensors"));
     let file = args
         .field
@@ -137,7 +139,15 @@ fn room_field(
         .or_else(|| cached.clone().filter(|p| p.is_file()))
         .or_else(|| Some(shipped).filter(|p| generated && p.is_file()));
     if let Some(f) = file.filter(|_| k == 0 || args.field.is_none()) {
+        // A kept field carries its region's fingerprint: a file planted or left under the
+        // name is not taken for this region's.
         if cached.as_ref() == Some(&f) {
+            if FieldNet::read_tags(&f, REGION_TAG)?.as_deref() != Some(&key) {
+                bail!(
+                    "{}: not a field of this region (no or another fingerprint); remove it",
+                    f.display()
+                );
+            }
             eprintln!("room {seed}: field loaded from {}", f.display());
         }
         let net = FieldNet::load(&f)?;
@@ -150,15 +160,11 @@ fn room_field(
             ),
         };
     }
-    let bar = ProgressBar::new(args.field_steps).with_message(format!("room {seed}: 3D field"));
-    bar.set_style(ProgressStyle::with_template(
-        "{msg:>24} {bar:30} {pos}/{len} {elapsed_precise} (eta {eta})",
-    )?);
-    let cfg = Field3Config {
-        steps: args.field_steps,
-        seed,
-        ..Field3Config::default()
-    };
+    let style = ProgressStyle::with_template("{msg:>24} {bar:30} {pos}/{len} (eta {eta})")?;
+    let bar = ProgressBar::new(args.field_steps).with_style(style);
+    bar.set_message(format!("room {seed}: 3D field"));
+    let mut cfg = Field3Config::default();
+    (cfg.steps, cfg.seed) = (args.field_steps, seed);
     let (net, report) = train_field3(region, &cfg, None, |s, _, _| bar.set_position(s))?;
     bar.finish_and_clear();
     eprintln!(
@@ -172,7 +178,7 @@ fn room_field(
         let dir = p.parent().context("a folder")?;
         std::fs::create_dir_all(dir)
             .with_context(|| format!("--fields: creating {}", dir.display()))?;
-        net.save(p)?;
+        net.save_tagged(p, &[(REGION_TAG, key)])?;
         eprintln!("room {seed}: field kept in {}", p.display());
     }
     Ok((net, Some(report.train_s)))

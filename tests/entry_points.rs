@@ -446,3 +446,79 @@ fn accessible_refuses_floors_too_large_and_warns_of_thin_samples() {
     assert!(stderr.contains("set --samples 96000"), "{stderr}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Issue 36, the cases not tried before: a field planted in `room_nav --fields` under the name
+/// of another's is refused by its fingerprint; an output that is a link elsewhere is replaced,
+/// its target kept; a read-only output folder gives an error naming the path (run as another
+/// user where the test runs as root, since root writes anywhere).
+#[test]
+fn room_nav_refuses_planted_fields_and_keeps_what_links_point_at() {
+    let Some(nav) = example("room_nav") else {
+        return;
+    };
+    let dir = scratch("planted");
+    let (out, fields) = (dir.join("out"), dir.join("fields"));
+    std::fs::create_dir_all(&out).unwrap();
+    let victim = write(&dir, "victim.txt", "keep");
+    std::os::unix::fs::symlink(&victim, out.join("top.png")).unwrap();
+    let (out_s, fields_s) = (out.to_string_lossy(), fields.to_string_lossy());
+    let go = |steps: &str| {
+        let args = [
+            "--seed",
+            "10001",
+            "--pairs",
+            "1",
+            "--big-budget",
+            "100",
+            "--json",
+        ];
+        let more = [
+            "--fields",
+            &fields_s,
+            "--field-steps",
+            steps,
+            "--out",
+            &out_s,
+        ];
+        run(&nav, &[&args[..], &more].concat())
+    };
+    let done = go("2");
+    assert!(
+        done.status.success(),
+        "{}",
+        String::from_utf8_lossy(&done.stderr)
+    );
+    assert_eq!(std::fs::read_to_string(&victim).unwrap(), "keep");
+    assert!(!std::fs::symlink_metadata(out.join("top.png"))
+        .unwrap()
+        .is_symlink());
+    // The 2-step field planted as the 3-step one of the same region.
+    let kept = std::fs::read_dir(&fields)
+        .unwrap()
+        .next()
+        .unwrap()
+        .unwrap()
+        .path();
+    let name = kept
+        .to_string_lossy()
+        .replace("_2.safetensors", "_3.safetensors");
+    std::fs::copy(&kept, &name).unwrap();
+    refuses(go("3"), "not a field of this region");
+    // A read-only folder, as the nobody user.
+    let locked = dir.join("locked");
+    std::fs::create_dir_all(&locked).unwrap();
+    std::fs::set_permissions(&locked, std::os::unix::fs::PermissionsExt::from_mode(0o555)).unwrap();
+    let as_nobody = Command::new("setpriv")
+        .args(["--reuid=65534", "--regid=65534", "--clear-groups", "--"])
+        .arg(&nav)
+        .args(["--out", &locked.join("out").to_string_lossy()])
+        .env("RUST_BACKTRACE", "0")
+        .output();
+    // Without setpriv, or not as root, there is no other user to be: nothing to try.
+    if let Ok(o) = as_nobody {
+        if !String::from_utf8_lossy(&o.stderr).contains("setpriv:") {
+            refuses(o, "locked/out");
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

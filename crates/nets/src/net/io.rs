@@ -30,6 +30,34 @@ impl FieldNet {
         self.write_file(path.as_ref(), Vec::new(), HashMap::new())
     }
 
+    /// [`FieldNet::save`] with `tags` added to the file's metadata (under keys of the caller's,
+    /// which must not start with `envfield.`): what the weights were trained on, for a cache
+    /// to check before it loads them ([`FieldNet::read_tags`]).
+    ///
+    /// # Errors
+    /// [`NetsError::InvalidInput`] for a reserved key; I/O errors naming the file.
+    pub fn save_tagged(&self, path: impl AsRef<Path>, tags: &[(&str, String)]) -> Result<()> {
+        if let Some((k, _)) = tags.iter().find(|(k, _)| k.starts_with("envfield.")) {
+            return Err(NetsError::InvalidInput(format!(
+                "metadata key `{k}` is reserved"
+            )));
+        }
+        let metadata = tags
+            .iter()
+            .map(|(k, v)| (k.to_string(), v.clone()))
+            .collect();
+        self.write_file(path.as_ref(), Vec::new(), metadata)
+    }
+
+    /// The value of metadata key `key` in the weight file at `path` (written by
+    /// [`FieldNet::save_tagged`]), `None` when the file has none.
+    ///
+    /// # Errors
+    /// [`NetsError::Checkpoint`] for an unreadable or foreign file.
+    pub fn read_tags(path: impl AsRef<Path>, key: &str) -> Result<Option<String>> {
+        Ok(TensorFile::read(path.as_ref())?.metadata.get(key).cloned())
+    }
+
     /// Loads a network saved by [`FieldNet::save`] (or a training checkpoint), rebuilding it
     /// from the config in the file. A checkpoint that keeps a moving average of the weights
     /// ([`crate::TrainConfig::ema_decay`]) loads the average: the network that training
