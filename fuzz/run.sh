@@ -1,13 +1,14 @@
 #!/usr/bin/env bash
 # Runs every fuzz target for a bounded time and prints one line per target: its run time,
 # executions and crashes. Needs the nightly toolchain and cargo-fuzz
-# (`cargo install cargo-fuzz`). Usage: fuzz/run.sh [SECONDS_PER_TARGET] (default 60).
+# (`cargo install cargo-fuzz`). Usage: [TARGETS="a b"] fuzz/run.sh [SECONDS_PER_TARGET]
+# (default 60).
 # Seeds come from fuzz/seeds/<target>/ (made by fuzz/seeds.sh); anything that crashes lands
 # in fuzz/artifacts/<target>/ and belongs in tests/hostile_input.rs as a regression.
 set -euo pipefail
 cd "$(dirname "$0")"
 secs=${1:-60}
-targets=(maze_text png npy obj ply pose_json weights model_config)
+targets=(${TARGETS:-maze_text png npy obj ply pose_json weights model_config scene_import vae_file})
 cargo +nightly fuzz build -O "${targets[@]/#/}" >/dev/null 2>&1 || cargo +nightly fuzz build -O
 printf '%-14s %8s %12s %8s\n' target seconds executions crashes
 for t in "${targets[@]}"; do
