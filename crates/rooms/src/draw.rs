@@ -4,7 +4,7 @@
 use crate::{AccessibleRegion, RegionConfig, Result, RoomsError};
 use envfield_grid::{normals, Point3m};
 use envfield_scene::{sample_surface, Scene};
-use envfield_vae::{Cvae, SampleOptions};
+use envfield_vae::{Cvae, SampleOptions, NORMAL_SALT};
 
 /// The VAE's cloud of a scene: as many surface points as it reads
 /// ([`Cvae::cloud_points`]), seeded.
@@ -47,7 +47,7 @@ pub fn draw_torsos(
         &SampleOptions::new(options.n, options.seed ^ 0xF1F1),
     )?;
     // Moved as in training: a standard-normal step of `jitter` in x and y.
-    let g = normals(2 * firsts.len(), options.seed ^ 0x7E77 ^ 0x5EED_0F2A);
+    let g = normals(2 * firsts.len(), options.seed ^ 0x7E77 ^ NORMAL_SALT);
     let at: Vec<[f32; 2]> = firsts
         .iter()
         .zip(g.chunks_exact(2))

@@ -234,10 +234,9 @@ pub fn import_mesh(
     for v in &mut out.vertices {
         *v += shift;
     }
-    let (lo2, hi2) = bounds(&out.vertices);
     let report = ImportReport {
         triangles: out.triangles.len(),
-        bounds: [lo2.into(), hi2.into()],
+        bounds: [(lo + shift).into(), (hi + shift).into()],
         floor_height: floor,
         shift: shift.into(),
         warnings,

@@ -42,6 +42,6 @@ mod train;
 pub use config::{GateConfig, LocalConfig, VaeConfig, VaeTrainConfig};
 pub use data::{PoseKind, RoomTorsos, TorsoSource};
 pub use error::{Result, VaeError};
-pub use model::{Cvae, VaeKind};
+pub use model::{Cvae, VaeKind, NORMAL_SALT};
 pub use sample::{Gate, Gated, Neighbourhoods, SampleOptions, WholeScene};
 pub use train::{VaeProgress, VaeTrainer};

@@ -378,9 +378,10 @@ impl Cvae {
     }
 }
 
-/// Mixed into a seed for the standard-normal codes, so they do not repeat the generator's
-/// other draws from the same seed.
-pub(crate) const NORMAL_SALT: u64 = 0x5EED_0F2A;
+/// Mixed into a seed for the VAE's standard-normal draws (its codes, and the anchors' jitter in
+/// training and in `envfield_rooms::draw_torsos`), so they do not repeat the generator's other
+/// draws from the same seed.
+pub const NORMAL_SALT: u64 = 0x5EED_0F2A;
 
 /// Pose kinds of a VAE with kinds: standing, sitting, lying, in this order.
 pub(crate) const KINDS: usize = 3;
