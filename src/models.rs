@@ -2,7 +2,7 @@
 //! the rule the examples and benchmarks share for picking weight files.
 
 use envfield_grid::{Ensemble, MoveRule, Symmetric};
-use envfield_nets::{model_file, FieldNet, NetsError, Result, Vin};
+use envfield_nets::{model_file, FieldNet, NetsError, Result, Vin, VinConfig};
 use envfield_plan::{BoxedField, Learned};
 use std::path::{Path, PathBuf};
 
@@ -96,11 +96,28 @@ impl ModelSource {
 }
 
 impl ModelSource {
-    /// VIN's own file for the size in the folder, loaded.
+    /// VIN's own file for the size in the folder, loaded. A side without a file of its own
+    /// gets the VIN trained on the largest side below it, with K raised for its side
+    /// ([`VinConfig::for_size`]): VIN's way to plan on larger maps than it saw.
     fn own_vin(&self, size: usize) -> Result<(PathBuf, Vin)> {
-        let file = model_file(&self.dir, "vin", size)?;
-        let vin = Vin::load(&file)?;
-        Ok((file, vin))
+        match model_file(&self.dir, "vin", size) {
+            Ok(file) => {
+                let vin = Vin::load(&file)?;
+                Ok((file, vin))
+            }
+            Err(missing) => {
+                let below = (1..size)
+                    .rev()
+                    .map(|s| self.dir.join(format!("vin_{s}.safetensors")))
+                    .find(|p| p.is_file());
+                let Some(file) = below else {
+                    return Err(missing);
+                };
+                let vin =
+                    Vin::load(&file)?.with_iterations(VinConfig::for_size(size).iterations)?;
+                Ok((file, vin))
+            }
+        }
     }
 }
 
@@ -150,5 +167,19 @@ mod tests {
         let err = with(&broken).load("vin", 16).err().unwrap().to_string();
         assert!(err.contains("broken.safetensors"), "{err}");
         std::fs::remove_dir_all(&dir).ok();
+    }
+
+    #[test]
+    fn vin_on_a_larger_side_is_the_largest_trained_one_with_k_raised() {
+        let source = shipped();
+        let (file, learned) = source.load("vin", 64).unwrap();
+        assert_eq!(file, source.dir.join("vin_28.safetensors"));
+        let Learned::Policy(policy) = learned else {
+            panic!("VIN is a policy");
+        };
+        assert_eq!(policy.name(), "vin");
+        let vin = source.own_vin(48).unwrap().1;
+        assert_eq!(vin.config().iterations, VinConfig::for_size(48).iterations);
+        assert!(source.own_vin(4).is_err(), "no VIN below 8 cells");
     }
 }

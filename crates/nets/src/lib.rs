@@ -62,4 +62,4 @@ pub use train::{
     resume_on, validation_loss, ContextOptions, DataCheck, LossShaping, MazeRecipe, Progress,
     TrainConfig, TrainSummary, Trainer,
 };
-pub use vin::{vin_examples, Vin, VinConfig, VinExample, VinTrainConfig, VinTrainer};
+pub use vin::{Vin, VinConfig, VinData, VinStep, VinTrainConfig, VinTrainer};

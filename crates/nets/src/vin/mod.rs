@@ -1,18 +1,18 @@
 //! The Value Iteration Network baseline (Tamar et al. 2016): the network, its files and its
 //! policy (the network called at every step, as VIN plans). Training is in [`train`].
 
+mod kernel;
 mod train;
 
-pub use train::{vin_examples, VinExample, VinTrainConfig, VinTrainer};
+pub use train::{VinData, VinStep, VinTrainConfig, VinTrainer};
 
-use crate::layers::{Conv, ConvSpec, IndexCache, Linear};
 use crate::params::{
-    weight_metadata, write_weights, AdamW, Init, ParamStore, TensorFile, FORMAT, META_CONFIG,
-    META_STEP,
+    weight_metadata, write_weights, Init, ParamStore, TensorFile, FORMAT, META_CONFIG, META_STEP,
 };
 use crate::{NetsError, Result};
-use candle_core::{Device, Tensor, D};
+use candle_core::{Device, Tensor};
 use envfield_grid::{Cell2, Grid2, MoveRule, Policy};
+use kernel::{MapInput, Weights, ACTIONS};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -73,16 +73,15 @@ struct VinFileConfig {
 /// `q = conv3x3([r, v])`, `v = max_channels(q)` repeated K times, then the Q values at the
 /// agent's cell through a linear layer to 8 action logits (the order of
 /// [`envfield_grid::DIRECTIONS_8`]).
+///
+/// Its passes are written by hand over plain buffers (`kernel`), several times faster than
+/// candle's ops at VIN's sizes; the weights keep the file layout of envfield's other networks.
 #[derive(Debug)]
 pub struct Vin {
     config: VinConfig,
+    /// Names, shapes and the seeded initialisation, in file order.
     store: ParamStore,
-    h: Conv,
-    r: Linear,
-    q: Conv,
-    policy: Linear,
-    cache: IndexCache,
-    device: Device,
+    weights: Weights,
 }
 
 impl Vin {
@@ -97,26 +96,30 @@ impl Vin {
         // VIN initialises every weight with standard deviation 0.01; larger Q weights make the
         // K max-iterations blow up.
         let small = Init::Normal(0.01);
-        let h = Conv::with_init(&mut store, "h", 2, ConvSpec::new(config.hidden, 1), small)?;
-        let r = Linear::new(&mut store, "r", config.hidden, 1, small)?;
-        let q = Conv::with_init(
-            &mut store,
-            "q",
-            2,
-            ConvSpec::new(config.q_channels, 1),
-            small,
-        )?;
-        let policy = Linear::new(&mut store, "policy", config.q_channels, 8, small)?;
+        let (hidden, qc) = (config.hidden, config.q_channels);
+        store.add("h.weight".into(), &[18, hidden], small)?;
+        store.add("h.bias".into(), &[hidden], Init::Zeros)?;
+        store.add("r.weight".into(), &[hidden, 1], small)?;
+        store.add("r.bias".into(), &[1], Init::Zeros)?;
+        store.add("q.weight".into(), &[18, qc], small)?;
+        store.add("q.bias".into(), &[qc], Init::Zeros)?;
+        store.add("policy.weight".into(), &[qc, ACTIONS], small)?;
+        store.add("policy.bias".into(), &[ACTIONS], Init::Zeros)?;
+        let weights = Self::read_store(&store)?;
         Ok(Self {
             config,
             store,
-            h,
-            r,
-            q,
-            policy,
-            cache: IndexCache::default(),
-            device,
+            weights,
         })
+    }
+
+    fn read_store(store: &ParamStore) -> Result<Weights> {
+        let parts = store
+            .vars()
+            .iter()
+            .map(|v| Ok(v.flatten_all()?.to_vec1::<f32>()?))
+            .collect::<Result<Vec<_>>>()?;
+        Ok(Weights::from_parts(parts))
     }
 
     /// The config.
@@ -124,59 +127,33 @@ impl Vin {
         &self.config
     }
 
+    /// The same network with `iterations` value-iteration steps: VIN's way to plan on larger
+    /// maps than it was trained on (its paper raises K with the map's side; see
+    /// [`VinConfig::for_size`]).
+    ///
+    /// # Errors
+    /// [`NetsError::InvalidConfig`] for iterations outside 1..=4096.
+    pub fn with_iterations(mut self, iterations: usize) -> Result<Self> {
+        let config = VinConfig {
+            iterations,
+            ..self.config
+        };
+        config.validate()?;
+        self.config = config;
+        Ok(self)
+    }
+
     /// Number of trainable scalars.
     pub fn parameter_count(&self) -> usize {
         self.store.count()
     }
 
-    /// The Q maps (B, H, W, q_channels) after K iterations, for mazes of one size.
-    pub(crate) fn q_maps(&self, grids: &[&Grid2], goals: &[Cell2]) -> Result<Tensor> {
-        let (h, w) = (grids[0].rows(), grids[0].cols());
-        let b = grids.len();
-        let mut input = vec![0f32; b * h * w * 2];
-        for (k, (g, goal)) in grids.iter().zip(goals).enumerate() {
-            if (g.rows(), g.cols()) != (h, w) {
-                return Err(NetsError::InvalidInput("VIN batch mixes maze sizes".into()));
-            }
-            for (i, &o) in g.obstacles().iter().enumerate() {
-                input[(k * h * w + i) * 2] = o as u8 as f32;
-            }
-            input[(k * h * w + goal.row * w + goal.col) * 2 + 1] = 10.0;
-        }
-        let x = Tensor::from_vec(input, (b, h, w, 2), &self.device)?;
-        let hidden = self.h.forward(&x, &self.cache)?;
-        let r = self
-            .r
-            .forward(&hidden.reshape((b * h * w, self.config.hidden))?)?
-            .reshape((b, h, w, 1))?;
-        let mut v = Tensor::zeros((b, h, w, 1), x.dtype(), &self.device)?;
-        let mut q = self.q.forward(&Tensor::cat(&[&r, &v], 3)?, &self.cache)?;
-        for _ in 0..self.config.iterations {
-            v = q.max_keepdim(D::Minus1)?;
-            q = self.q.forward(&Tensor::cat(&[&r, &v], 3)?, &self.cache)?;
-        }
-        Ok(q)
+    pub(crate) fn weights(&self) -> &Weights {
+        &self.weights
     }
 
-    /// Action logits (N, 8) for `states[i]` of maze `items[i]`.
-    pub(crate) fn logits(
-        &self,
-        q: &Tensor,
-        w: usize,
-        h: usize,
-        states: &[(usize, Cell2)],
-    ) -> Result<Tensor> {
-        let ids: Vec<u32> = states
-            .iter()
-            .map(|&(b, c)| (b * h * w + c.row * w + c.col) as u32)
-            .collect();
-        let n = ids.len();
-        let flat = q.reshape((
-            q.elem_count() / self.config.q_channels,
-            self.config.q_channels,
-        ))?;
-        let at = flat.index_select(&Tensor::from_vec(ids, n, &self.device)?, 0)?;
-        self.policy.forward(&at)
+    pub(crate) fn weights_mut(&mut self) -> &mut Weights {
+        &mut self.weights
     }
 
     /// The 8 action logits at `state` of `grid` with `goal` (one full network pass).
@@ -184,14 +161,11 @@ impl Vin {
     /// # Errors
     /// A state or goal outside the grid or on an obstacle.
     pub fn action_logits(&self, grid: &Grid2, goal: Cell2, state: Cell2) -> Result<[f32; 8]> {
-        grid.check_free(goal, "goal")?;
-        grid.check_free(state, "state")?;
-        let q = self.q_maps(&[grid], &[goal])?;
-        let l = self.logits(&q, grid.cols(), grid.rows(), &[(0, state)])?;
-        let v = l.flatten_all()?.to_vec1::<f32>()?;
-        let mut out = [0f32; 8];
-        out.copy_from_slice(&v);
-        Ok(out)
+        let goal = grid.check_free(goal, "goal")?;
+        let state = grid.check_free(state, "state")?;
+        let map = map_input(grid, goal);
+        let fwd = kernel::forward(&self.weights, map, self.config.iterations, false);
+        Ok(kernel::logits(&self.weights, &fwd.q, grid.len(), state))
     }
 
     /// Saves weights and config (atomically).
@@ -202,15 +176,31 @@ impl Vin {
         self.write(path.as_ref(), None)
     }
 
-    pub(crate) fn write(&self, path: &Path, optimiser: Option<&AdamW>) -> Result<()> {
-        let mut tensors = self.store.named_tensors();
+    /// The weights as named tensors in file order (`prefix` before each name).
+    fn named(&self, parts: &Weights, prefix: &str) -> Result<Vec<(String, Tensor)>> {
+        let device = Device::Cpu;
+        self.store
+            .names()
+            .iter()
+            .zip(self.store.vars())
+            .zip(parts.parts())
+            .map(|((name, var), data)| {
+                let t = Tensor::from_vec(data.clone(), var.dims(), &device)?;
+                Ok((format!("{prefix}{name}"), t))
+            })
+            .collect()
+    }
+
+    /// Writes weights and config, and with `optimiser` RMSProp's mean squares and the step.
+    pub(crate) fn write(&self, path: &Path, optimiser: Option<(&Weights, u64)>) -> Result<()> {
+        let mut tensors = self.named(&self.weights, "")?;
         let file_config = VinFileConfig {
             config: self.config,
         };
         let mut meta = weight_metadata(FORMAT, &file_config)?;
-        if let Some(opt) = optimiser {
-            tensors.extend(opt.state_tensors(self.store.names()));
-            meta.insert(META_STEP.into(), opt.step.to_string());
+        if let Some((squares, step)) = optimiser {
+            tensors.extend(self.named(squares, SQUARES)?);
+            meta.insert(META_STEP.into(), step.to_string());
         }
         write_weights(path, &tensors, meta)
     }
@@ -224,7 +214,7 @@ impl Vin {
         Ok(Self::load_with_state(path.as_ref())?.0)
     }
 
-    pub(crate) fn load_with_state(path: &Path) -> Result<(Self, Option<OptimiserState>)> {
+    pub(crate) fn load_with_state(path: &Path) -> Result<(Self, Option<(Weights, u64)>)> {
         let mut file = TensorFile::read(path)?;
         let bad = |reason: String| NetsError::Checkpoint {
             path: path.to_path_buf(),
@@ -236,16 +226,34 @@ impl Vin {
             .ok_or_else(|| bad("no model config".into()))?;
         let cfg: VinFileConfig =
             serde_json::from_str(json).map_err(|e| bad(format!("not a VIN file: {e}")))?;
-        let net = Self::new(cfg.config, 0)?;
+        let mut net = Self::new(cfg.config, 0)?;
+        let device = Device::Cpu;
+        let step = file.metadata.get(META_STEP).cloned();
+        let mut take_all = |prefix: &str| -> Result<Weights> {
+            let parts = net
+                .store
+                .names()
+                .iter()
+                .zip(net.store.vars())
+                .map(|(name, var)| {
+                    let t = file.take(path, &format!("{prefix}{name}"), var.dims(), &device)?;
+                    Ok(t.flatten_all()?.to_vec1::<f32>()?)
+                })
+                .collect::<Result<Vec<_>>>()?;
+            Ok(Weights::from_parts(parts))
+        };
+        net.weights = take_all("")?;
         let mut state = None;
-        if let Some(step) = file.metadata.get(META_STEP).cloned() {
+        if let Some(step) = step {
             let step: u64 = step.parse().map_err(|e| bad(format!("bad step: {e}")))?;
-            let (m, v) = file.take_moments(path, &net.store, &net.device)?;
-            state = Some((m, v, step));
-        }
-        let mut loaded = Vec::new();
-        for (name, var) in net.store.names().iter().zip(net.store.vars()) {
-            loaded.push(file.take(path, name, var.dims(), &net.device)?);
+            let squares = take_all(SQUARES).map_err(|e| match e {
+                NetsError::MissingWeight { .. } => bad(
+                    "a checkpoint without VIN's RMSProp state (written by an older trainer?)"
+                        .into(),
+                ),
+                other => other,
+            })?;
+            state = Some((squares, step));
         }
         if let Some(name) = file.tensors.keys().min() {
             return Err(NetsError::UnexpectedWeight {
@@ -253,15 +261,25 @@ impl Vin {
                 name: name.clone(),
             });
         }
-        for (var, t) in net.store.vars().iter().zip(loaded) {
-            var.set(&t)?;
+        for (var, data) in net.store.vars().iter().zip(net.weights.parts()) {
+            var.set(&Tensor::from_vec(data.clone(), var.dims(), &device)?)?;
         }
         Ok((net, state))
     }
 }
 
-/// Adam's first and second moments and the step, as saved in a checkpoint.
-pub(crate) type OptimiserState = (Vec<Tensor>, Vec<Tensor>, u64);
+/// The prefix of RMSProp's mean squares in a VIN checkpoint.
+const SQUARES: &str = "optimiser.rmsprop.";
+
+/// The kernel's view of a maze and its goal's flat index.
+fn map_input(grid: &Grid2, goal: usize) -> MapInput<'_> {
+    MapInput {
+        obstacles: grid.obstacles(),
+        rows: grid.rows(),
+        cols: grid.cols(),
+        goal,
+    }
+}
 
 /// VIN's policy: the network runs on the maze for every move and scores the eight actions by
 /// their logits, so `envfield_plan::PolicyWalk(vin)` plans as VIN does (the legal action with
