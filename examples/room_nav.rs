@@ -6,8 +6,13 @@
 //! Ours (`ours`, `ours_exact`) is the search under the pose filter, then the region alone
 //! where the poses allow no route within the budget (`--budget`, expansions per step of the
 //! shortest walk; `FieldSearch3::search_relaxed`), then straight cuts the pose filter allows
-//! (`FieldSearch3::shortcut`). `ours_raw` is the paper's search alone, and `ours_noaff` the
-//! search and cuts under the region alone.
+//! (`FieldSearch3::shortcut`). Its field is made once per goal (fast marching, or the learned
+//! field in one batched pass) and its pose checks read the scene's distances sampled once per
+//! room, so each step is lookups. `ours_raw` is the paper's search alone (a network pass per
+//! step, checks against the scene), and `ours_noaff` the search and cuts under the region
+//! alone. `navmesh` is the games' planner: a navigation mesh of the floor (Recast's pipeline
+//! in Rust) and Polyanya's shortest paths on it. Every planner's time is split per path
+//! (`<planner>_s`), per goal (`_goal_s`) and per room (`_room_s`).
 //!
 //! ```text
 //! cargo run --release --example room_nav                              # the shipped room, a few pairs
@@ -25,8 +30,11 @@
 
 use anyhow::{bail, Context, Result};
 use clap::Parser;
+use envfield::affordance::{walk, WalkConfig};
 use envfield::nets::{FieldNet, ModelConfig};
-use envfield::rooms::harness::{pairs, run_pair, PairKind, PlannerKind};
+use envfield::rooms::harness::{
+    pairs, run_pair, PairKind, PlannerKind, RoomContext, Run, RunSettings,
+};
 use envfield::rooms::pictures::{room_view, top_view};
 use envfield::rooms::tables::{finite_mean, Tally};
 use envfield::rooms::{
@@ -38,6 +46,12 @@ use envfield::scene::{generate_room, read_scene, write_polyline_obj, ImportConfi
 use envfield::vae::Cvae;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+#[path = "shared/navmesh.rs"]
+mod navmesh;
+use envfield::rooms::harness::FloorPlanner;
+use navmesh::{Navmesh, NavmeshConfig};
 
 #[global_allocator]
 static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
@@ -184,6 +198,28 @@ fn room_field(
     Ok((net, Some(report.train_s)))
 }
 
+/// The first pair's files: the scene, the region, every planner's path and poses, and the
+/// two pictures.
+fn write_first(out: &Path, room: &RoomContext, runs: &[Run]) -> Result<()> {
+    room.scene.to_mesh().write(out.join("scene.obj"))?;
+    room.region.write_ply(out.join("region.ply"))?;
+    for run in runs {
+        let line: Vec<Point3<f32>> = run.path.iter().map(|&p| point(p)).collect();
+        if line.len() > 1 {
+            write_polyline_obj(&line, out.join(format!("path_{}.obj", run.planner)))?;
+        }
+        run.poses
+            .write(out.join(format!("poses_{}.json", run.planner)))?;
+    }
+    let drawn: Vec<_> = runs.iter().map(|r| (r.planner, r.path.clone())).collect();
+    top_view(room.region, &drawn).write_png(out.join("top.png"))?;
+    // A few of ours' poses, evenly along its path.
+    let ours = &runs[0].poses.frames;
+    let skeletons: Vec<_> = (0..5).map(|j| ours[j * (ours.len() - 1) / 4]).collect();
+    room_view(room.scene, &drawn, &skeletons)?.write_png(out.join("room.png"))?;
+    Ok(())
+}
+
 fn main() -> Result<()> {
     let args = Args::parse();
     if args.rooms == 0 || args.rooms > 1000 || args.pairs == 0 || args.pairs > 10_000 {
@@ -220,9 +256,10 @@ fn main() -> Result<()> {
     let planners = PlannerKind::ALL;
     let mut tally = Tally::default();
     let mut field_s = Vec::new();
+    let (mut region_s, mut memory) = (Vec::new(), Vec::new());
     for k in 0..args.rooms {
         let seed = args.seed + k;
-        let (scene, room) = match &args.scene {
+        let (scene, generated) = match &args.scene {
             Some(f) => (
                 {
                     let import = ImportConfig::new(args.up, args.units);
@@ -240,45 +277,60 @@ fn main() -> Result<()> {
                 (r.scene.clone(), Some(r))
             }
         };
+        let t = Instant::now();
         let region = sample_region(&vae, &scene, args.samples, seed)?;
+        region_s.push(t.elapsed().as_secs_f64());
         let (net, trained_s) = room_field(&args, k, seed, &region)?;
         field_s.extend(trained_s);
-        let ps = pairs(room.as_ref(), &scene, &region, args.pairs, seed)?;
+        let (distances, distances_s) = RoomContext::distances(&scene)?;
+        let gait = walk(&WalkConfig::default(), seed)?;
+        let mesh = match Navmesh::build(&scene, &NavmeshConfig::for_gait(&gait)) {
+            Ok(m) => {
+                eprintln!(
+                    "room {seed}: navigation mesh of {} polygons, {} vertices, {:.1} ms",
+                    m.polygons,
+                    m.vertices,
+                    1e3 * m.build_s
+                );
+                Some(m)
+            }
+            Err(e) => {
+                eprintln!("room {seed}: no navigation mesh, its row is left out: {e}");
+                None
+            }
+        };
+        memory.push([
+            region.grid.len(),
+            distances.bytes(),
+            4 * region.grid.len(),
+            mesh.as_ref().map_or(0, |m| m.bytes()),
+        ]);
+        let room_planners: Vec<PlannerKind> = planners
+            .into_iter()
+            .filter(|&p| p != PlannerKind::Navmesh || mesh.is_some())
+            .collect();
+        let room = RoomContext {
+            scene: &scene,
+            region: &region,
+            net: &net,
+            distances: &distances,
+            distances_s,
+            navmesh: mesh.as_ref().map(|m| (m as &dyn FloorPlanner, m.build_s)),
+        };
+        let ps = pairs(generated.as_ref(), &scene, &region, args.pairs, seed)?;
         for (i, pair) in ps.iter().enumerate() {
             let budget = match pair.kind {
                 PairKind::Walk => args.budget,
                 PairKind::Sit => args.sit_budget,
             };
-            let runs = run_pair(
-                &scene,
-                &region,
-                &net,
-                pair,
-                &planners,
-                args.big_budget,
+            let settings = RunSettings {
                 budget,
-                seed + i as u64,
-            )?;
+                big_budget: args.big_budget,
+                seed: seed + i as u64,
+            };
+            let runs = run_pair(&room, pair, &room_planners, &settings)?;
             if k == 0 && i == 0 {
-                scene.to_mesh().write(args.out.join("scene.obj"))?;
-                region.write_ply(args.out.join("region.ply"))?;
-                for run in &runs {
-                    let line: Vec<Point3<f32>> = run.path.iter().map(|&p| point(p)).collect();
-                    if line.len() > 1 {
-                        write_polyline_obj(
-                            &line,
-                            args.out.join(format!("path_{}.obj", run.planner)),
-                        )?;
-                    }
-                    run.poses
-                        .write(args.out.join(format!("poses_{}.json", run.planner)))?;
-                }
-                let drawn: Vec<_> = runs.iter().map(|r| (r.planner, r.path.clone())).collect();
-                top_view(&region, &drawn).write_png(args.out.join("top.png"))?;
-                // A few of ours' poses, evenly along its path.
-                let ours = &runs[0].poses.frames;
-                let skeletons: Vec<_> = (0..5).map(|j| ours[j * (ours.len() - 1) / 4]).collect();
-                room_view(&scene, &drawn, &skeletons)?.write_png(args.out.join("room.png"))?;
+                write_first(&args.out, &room, &runs)?;
             }
             tally.add(pair.kind, &runs);
         }
@@ -288,6 +340,14 @@ fn main() -> Result<()> {
     let table3 = tally.table3(&planners, &mut line);
     let table4 = tally.table4(&planners, &mut line);
     line["field_train_s_per_room"] = finite_mean(&field_s).into();
+    line["region_s_per_room"] = finite_mean(&region_s).into();
+    // Bytes per room: the region's voxels, the distance grid, one goal's field table, the
+    // navigation mesh.
+    let names = ["region", "distances", "field_per_goal", "navmesh"];
+    for (j, name) in names.iter().enumerate() {
+        let v: Vec<f64> = memory.iter().map(|m: &[usize; 4]| m[j] as f64).collect();
+        line[format!("{name}_bytes_per_room")] = finite_mean(&v).into();
+    }
     if !args.json {
         println!("Table 3: {} pairs in {} room(s)", tally.pairs(), args.rooms);
         print!("{table3}");

@@ -1,7 +1,7 @@
 //! Support and collision checks of poses against a scene (paper section 4.2, "path
 //! optimization by affordance").
 
-use envfield_scene::Scene;
+use envfield_scene::{Scene, SignedDistance};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -81,8 +81,11 @@ impl AffordanceReport {
 ///
 /// # Errors
 /// [`AffordanceError::InvalidInput`] for a non-finite joint or bad tolerances.
-pub fn check_pose(
-    scene: &Scene,
+///
+/// `scene` is any [`SignedDistance`]: the [`Scene`] itself, or a
+/// [`DistanceGrid`](envfield_scene::DistanceGrid) sampled from it for fast approximate checks.
+pub fn check_pose<S: SignedDistance + ?Sized>(
+    scene: &S,
     pose: &Pose,
     support: Support,
     config: &AffordanceConfig,
@@ -91,7 +94,7 @@ pub fn check_pose(
     pose.validate()?;
     let mut distances = [0.0; JOINT_COUNT];
     for (d, p) in distances.iter_mut().zip(&pose.joints) {
-        *d = scene.signed_distance(p)?;
+        *d = scene.distance_at(p)?;
     }
     Ok(report(distances, support, config))
 }

@@ -1,6 +1,8 @@
 //! 3D environment fields over an accessible region: the exact one (fast marching over the
 //! accessible voxels, in metres) and the learned one (the goal-conditioned network, trained
-//! per scene as in the paper), both behind [`ContinuousField3`].
+//! per scene as in the paper), both behind [`ContinuousField3`]. Either can be a
+//! [`VoxelField3`]: one goal's values at the region's voxel centres, made once per goal (the
+//! fast marching, or one batched network pass), then read by interpolation at every step.
 
 use crate::{AccessibleRegion, Result, RoomsError};
 use envfield_eikonal::{FastMarching, Order};
@@ -29,18 +31,23 @@ fn to_voxel(frame: &VoxelFrame, p: Point3m) -> envfield_grid::Result<Point3> {
     Ok(Point3::new(clamp(q[0], 0), clamp(q[1], 1), clamp(q[2], 2)))
 }
 
-/// The exact 3D field of an accessible region for one goal: fast marching over the accessible
-/// voxels (second order, 6 neighbours), in metres. Between voxel centres it is trilinear over
-/// the accessible corners (their weights renormalised), so it is finite everywhere in an
-/// accessible voxel, right up to the region's faces, and infinite in an inaccessible one.
+/// A 3D field of one goal tabulated at an accessible region's voxel centres, in metres: the
+/// exact field ([`VoxelField3::new`], fast marching over the accessible voxels, second order,
+/// 6 neighbours) or a learned one ([`LearnedField3::tabulate`]). Between voxel centres it is
+/// trilinear over the accessible corners (their weights renormalised), so it is finite
+/// everywhere in an accessible voxel, right up to the region's faces, and infinite in an
+/// inaccessible one.
 #[derive(Clone, Debug)]
-pub struct ExactField3 {
+pub struct VoxelField3 {
     metres: Field3,
     frame: VoxelFrame,
     goal: Cell3,
 }
 
-impl ExactField3 {
+/// The exact field: a [`VoxelField3`] made by fast marching.
+pub type ExactField3 = VoxelField3;
+
+impl VoxelField3 {
     /// The field of `region` for the goal at `goal` (metres).
     ///
     /// # Errors
@@ -82,9 +89,14 @@ impl ExactField3 {
     pub fn goal(&self) -> Cell3 {
         self.goal
     }
+
+    /// Bytes of the table.
+    pub fn bytes(&self) -> usize {
+        std::mem::size_of_val(self.metres.values())
+    }
 }
 
-impl ContinuousField3 for ExactField3 {
+impl ContinuousField3 for VoxelField3 {
     fn value(&self, p: Point3m) -> envfield_grid::Result<f32> {
         // Over the accessible corners: plain trilinear weighting would make every point within
         // half a voxel of the region's faces infinite, and a torso standing in an accessible
@@ -152,6 +164,50 @@ impl<'a> LearnedField3<'a> {
             net,
             frame: region.frame,
             goal,
+        })
+    }
+
+    /// The field at every accessible voxel centre of `region` in one batched network pass
+    /// (infinite elsewhere), as a [`VoxelField3`] read by interpolation: the per-goal pass
+    /// that makes every later step a lookup.
+    ///
+    /// # Errors
+    /// [`RoomsError::InvalidInput`] for a region of another lattice; errors of the network.
+    pub fn tabulate(&self, region: &AccessibleRegion) -> Result<VoxelField3> {
+        if region.frame.shape != self.frame.shape {
+            return Err(RoomsError::InvalidInput(format!(
+                "tabulating a field of {:?} voxels over a region of {:?}",
+                self.frame.shape, region.frame.shape
+            )));
+        }
+        let free = region.free_indices();
+        let [_, ny, nz] = self.frame.shape;
+        let mut queries = Vec::with_capacity(3 * free.len());
+        for &i in free {
+            queries.extend([
+                (i / (ny * nz)) as f32,
+                ((i / nz) % ny) as f32,
+                (i % nz) as f32,
+            ]);
+        }
+        let batch = Batch {
+            extent: self.frame.shape.to_vec(),
+            items: 1,
+            obstacles: Vec::new(),
+            goals: vec![self.goal.x as f32, self.goal.y as f32, self.goal.z as f32],
+            per_item: free.len(),
+            queries,
+        };
+        let raw = self.net.predict_encoded(&batch)?;
+        let encoding = self.net.config().encoding();
+        let mut values = vec![f32::INFINITY; region.grid.len()];
+        for (&i, &t) in free.iter().zip(&raw) {
+            values[i] = encoding.decode(t) * self.frame.voxel;
+        }
+        Ok(VoxelField3 {
+            metres: Field3::new(self.frame.shape, values)?,
+            frame: self.frame,
+            goal: self.goal,
         })
     }
 

@@ -1,6 +1,11 @@
 //! The room navigation harness (paper Tables 3 and 4): the planners by name, the walking and
 //! sit-down pairs, one run of every planner on a pair with its poses fitted and checked, and
 //! the tables' summary. `room_nav` and the `room_planning` bench both run it.
+//!
+//! Each planner's work is split as a navigation mesh splits it, and timed so: once per room
+//! ([`RoomContext`]: the scene's distance grid ours' pose checks read, a navigation mesh's
+//! build), once per goal (the exact field's fast marching, the learned field's one batched
+//! pass over the region), and per path (the search, whose steps are lookups).
 
 use crate::{afford, point, sit_on, AccessibleRegion, ExactField3, PoseFilter, RegionConfig};
 use crate::{LearnedField3, Result, RoomsError};
@@ -13,7 +18,7 @@ use envfield_plan::space3::{
     prm, rrt, rrt_star, straight_line, FieldSearch3, Path3, SamplingConfig, StepFilter,
 };
 use envfield_scene::nalgebra::Point3;
-use envfield_scene::{Room, Scene};
+use envfield_scene::{DistanceGrid, Room, Scene};
 use std::fmt;
 use std::str::FromStr;
 use std::time::Instant;
@@ -40,11 +45,14 @@ pub enum PlannerKind {
     Prm,
     /// The straight line (blind to the region).
     Line,
+    /// A navigation mesh of the scene (the games' planner), given by the caller as a
+    /// [`FloorPlanner`]: `room_nav` and the bench build one with Recast's Rust port.
+    Navmesh,
 }
 
 impl PlannerKind {
     /// Every planner, in the tables' order.
-    pub const ALL: [PlannerKind; 9] = [
+    pub const ALL: [PlannerKind; 10] = [
         PlannerKind::Ours,
         PlannerKind::OursRaw,
         PlannerKind::OursNoAff,
@@ -54,6 +62,7 @@ impl PlannerKind {
         PlannerKind::RrtStarBig,
         PlannerKind::Prm,
         PlannerKind::Line,
+        PlannerKind::Navmesh,
     ];
 
     /// The planner's name in tables, JSON keys and file names.
@@ -68,15 +77,15 @@ impl PlannerKind {
             PlannerKind::RrtStarBig => "rrtstar_big",
             PlannerKind::Prm => "prm",
             PlannerKind::Line => "line",
+            PlannerKind::Navmesh => "navmesh",
         }
     }
 
     /// Which field the planner descends, if any.
     pub fn field(self) -> Option<FieldKind> {
         match self {
-            PlannerKind::Ours | PlannerKind::OursRaw | PlannerKind::OursNoAff => {
-                Some(FieldKind::Learned)
-            }
+            PlannerKind::Ours | PlannerKind::OursNoAff => Some(FieldKind::LearnedTable),
+            PlannerKind::OursRaw => Some(FieldKind::Learned),
             PlannerKind::OursExact => Some(FieldKind::Exact),
             _ => None,
         }
@@ -107,6 +116,7 @@ impl PlannerKind {
             search,
             sampling,
             big_budget,
+            navmesh,
         } = setup;
         let field = || {
             field.ok_or_else(|| RoomsError::InvalidInput(format!("planner {self}: needs a field")))
@@ -114,7 +124,14 @@ impl PlannerKind {
         let region = *region;
         Ok(match self {
             PlannerKind::Ours => search.search_relaxed(field()?, poses, region, start, goal)?,
-            PlannerKind::OursRaw => search.search(field()?, poses, start, goal)?,
+            PlannerKind::OursRaw => {
+                // The paper's search checks its poses against the scene itself.
+                let exact = PoseFilter {
+                    distances: None,
+                    ..*poses
+                };
+                search.search(field()?, &exact, start, goal)?
+            }
             PlannerKind::OursNoAff => {
                 let f = region as &dyn StepFilter;
                 let raw = search.search(field()?, f, start, goal)?;
@@ -137,6 +154,16 @@ impl PlannerKind {
             PlannerKind::Prm => prm(region, start, goal, sampling)?,
             PlannerKind::Line => {
                 Path3::ending(straight_line(start, goal, search.step)?, goal, 0.02)
+            }
+            PlannerKind::Navmesh => {
+                let mesh = navmesh.ok_or_else(|| {
+                    RoomsError::InvalidInput(
+                        "planner navmesh: no navigation mesh was given (RoomContext::navmesh)"
+                            .into(),
+                    )
+                })?;
+                let points = mesh.floor_path(start, goal)?.unwrap_or_else(|| vec![start]);
+                Path3::ending(points, goal, 0.02)
             }
         })
     }
@@ -168,10 +195,27 @@ impl FromStr for PlannerKind {
 /// The field a planner descends.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum FieldKind {
-    /// The room's learned field ([`LearnedField3`]).
+    /// The room's learned field ([`LearnedField3`]), one network pass per search step (the
+    /// paper's way).
     Learned,
-    /// The exact field ([`ExactField3`]).
+    /// The learned field tabulated over the region once per goal
+    /// ([`LearnedField3::tabulate`]), read by interpolation at every step.
+    LearnedTable,
+    /// The exact field ([`ExactField3`]), fast marching once per goal.
     Exact,
+}
+
+/// A planner of floor paths whose code lives outside this crate: the navigation mesh that
+/// `room_nav` and the `room_planning` bench build (its crates are theirs, not the library's).
+pub trait FloorPlanner: Sync {
+    /// Torso locations from `start` to `goal`, or `None` when there is no path.
+    ///
+    /// # Errors
+    /// Whatever stops it answering (a start off its mesh is `None`, not an error).
+    fn floor_path(&self, start: Point3m, goal: Point3m) -> Result<Option<Vec<Point3m>>>;
+
+    /// Bytes it keeps for the room.
+    fn bytes(&self) -> usize;
 }
 
 /// What a pair is.
@@ -351,8 +395,15 @@ pub struct Outcome {
     pub relaxed: bool,
     /// Distance from the path's end to the goal, metres.
     pub dist_m: f64,
-    /// Seconds the planner took (the fields it descends were made before).
+    /// Seconds the planner took for this path (the fields it descends were made before).
     pub seconds: f64,
+    /// Seconds of its work for this pair's goal: the exact field's fast marching, the learned
+    /// field's batched pass (0 for planners without per-goal work).
+    pub goal_seconds: f64,
+    /// Seconds of its work for the room, before any goal: the distance grid of ours' checks,
+    /// a navigation mesh's build (0 for planners without per-room work; PRM builds its
+    /// roadmap inside each path, with the start and goal in it).
+    pub room_seconds: f64,
     /// Path length over the exact field's distance, for a path that reached (NaN otherwise).
     pub path_ratio: f64,
     /// The shares of its fitted poses.
@@ -385,15 +436,77 @@ pub struct PairSetup<'a> {
     pub sampling: SamplingConfig,
     /// RRT*'s second budget.
     pub big_budget: usize,
+    /// The navigation mesh, if the caller built one.
+    pub navmesh: Option<&'a dyn FloorPlanner>,
+}
+
+/// How the planners are run on every pair of a room.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RunSettings {
+    /// Ours' expansions per step of the shortest walk.
+    pub budget: f64,
+    /// RRT*'s second budget (`rrtstar_big`).
+    pub big_budget: usize,
+    /// The samplers' seed.
+    pub seed: u64,
+}
+
+/// What a room gives every planner, made once before any goal: the scene, the accessible
+/// region, the learned field's network, the scene's distances that ours' pose checks read, and
+/// a navigation mesh if the caller built one, with the seconds each took.
+pub struct RoomContext<'a> {
+    /// The scene.
+    pub scene: &'a Scene,
+    /// The accessible region (the free space of every planner but the navigation mesh and
+    /// the line).
+    pub region: &'a AccessibleRegion,
+    /// The room's learned 3D field.
+    pub net: &'a FieldNet,
+    /// The scene's signed distances sampled at [`DISTANCE_CELL`] ([`RoomContext::distances`]).
+    pub distances: &'a DistanceGrid,
+    /// Seconds the distance grid took.
+    pub distances_s: f64,
+    /// A navigation mesh of the scene and the seconds its build took.
+    pub navmesh: Option<(&'a dyn FloorPlanner, f64)>,
+}
+
+/// The spacing of the distance grid ours' pose checks read, metres: fine enough that a check
+/// on it agrees with the scene's own on nearly every pose (the tables score every path's
+/// poses against the scene itself).
+pub const DISTANCE_CELL: f32 = 0.03;
+
+impl RoomContext<'_> {
+    /// The distance grid of `scene` for ours' checks: its bounding box grown by 0.2 m, at
+    /// [`DISTANCE_CELL`], with the seconds it took.
+    ///
+    /// # Errors
+    /// Errors of [`DistanceGrid::around`] (an empty scene).
+    pub fn distances(scene: &Scene) -> Result<(DistanceGrid, f64)> {
+        let t = Instant::now();
+        let grid = DistanceGrid::around(scene, 0.2, DISTANCE_CELL)?;
+        Ok((grid, t.elapsed().as_secs_f64()))
+    }
+
+    /// The seconds `planner` spent on the room before any goal.
+    pub fn room_seconds(&self, planner: PlannerKind) -> f64 {
+        match planner {
+            PlannerKind::Ours | PlannerKind::OursExact => self.distances_s,
+            PlannerKind::Navmesh => self.navmesh.map_or(0.0, |(_, s)| s),
+            _ => 0.0,
+        }
+    }
 }
 
 impl<'a> PairSetup<'a> {
     /// The setup of `pair` in the room: ours' budget is `budget` expansions per step of the
     /// `shortest` walk (metres) plus 200, the samplers step at the walk's step (at least
-    /// 5 cm), seeded by `seed`.
+    /// 5 cm), seeded by `seed`. Ours' pose checks read `distances` when given (the scene's
+    /// otherwise).
+    #[allow(clippy::too_many_arguments)]
     pub fn new(
         scene: &'a Scene,
         region: &'a AccessibleRegion,
+        distances: Option<&'a DistanceGrid>,
         pair: &'a Pair,
         shortest: f64,
         budget: f64,
@@ -411,6 +524,7 @@ impl<'a> PairSetup<'a> {
                 // A walk faces where it goes; a sit-down keeps the heading made for its seat.
                 face_the_move: pair.repeat,
                 affordance: Default::default(),
+                distances,
             },
             search: FieldSearch3 {
                 step,
@@ -425,38 +539,62 @@ impl<'a> PairSetup<'a> {
                 ..SamplingConfig::default()
             },
             big_budget,
+            navmesh: None,
         }
     }
 }
 
-/// Runs every planner of `planners` on one pair, each timed on its own, its poses fitted and
-/// checked. `budget` is ours' expansions per step of the shortest walk.
+/// Runs every planner of `planners` on one pair of the room, each timed on its own (per path,
+/// and its per-goal and per-room work apart), its poses fitted and checked against the scene.
 ///
 /// # Errors
-/// [`RoomsError::InvalidInput`] for a start or goal outside the region; errors of the planners
-/// and fields.
+/// [`RoomsError::InvalidInput`] for a start or goal outside the region, or the navigation
+/// mesh asked for and not given; errors of the planners and fields.
 pub fn run_pair(
-    scene: &Scene,
-    region: &AccessibleRegion,
-    net: &FieldNet,
+    room: &RoomContext,
     pair: &Pair,
     planners: &[PlannerKind],
-    big_budget: usize,
-    budget: f64,
-    seed: u64,
+    settings: &RunSettings,
 ) -> Result<Vec<Run>> {
+    let region = room.region;
     let goal_cell = region.cell(pair.goal, "goal")?;
     region.cell(pair.start, "start")?;
+    let t = Instant::now();
     let exact = ExactField3::at_cell(region, goal_cell)?;
+    let exact_s = t.elapsed().as_secs_f64();
     let shortest = exact.value(pair.start)? as f64;
-    let learned = LearnedField3::new(net, region, goal_cell)?;
-    let setup = PairSetup::new(scene, region, pair, shortest, budget, big_budget, seed);
+    let learned = LearnedField3::new(room.net, region, goal_cell)?;
+    let table = if planners
+        .iter()
+        .any(|p| p.field() == Some(FieldKind::LearnedTable))
+    {
+        let t = Instant::now();
+        let table = learned.tabulate(region)?;
+        Some((table, t.elapsed().as_secs_f64()))
+    } else {
+        None
+    };
+    let mut setup = PairSetup::new(
+        room.scene,
+        region,
+        Some(room.distances),
+        pair,
+        shortest,
+        settings.budget,
+        settings.big_budget,
+        settings.seed,
+    );
+    setup.navmesh = room.navmesh.map(|(m, _)| m);
     let mut out = Vec::with_capacity(planners.len());
     for &planner in planners {
-        let field: Option<&dyn ContinuousField3> = match planner.field() {
-            Some(FieldKind::Learned) => Some(&learned),
-            Some(FieldKind::Exact) => Some(&exact),
-            None => None,
+        let (field, goal_seconds): (Option<&dyn ContinuousField3>, f64) = match planner.field() {
+            Some(FieldKind::Learned) => (Some(&learned), 0.0),
+            Some(FieldKind::LearnedTable) => match &table {
+                Some((t, s)) => (Some(t), *s),
+                None => (None, 0.0),
+            },
+            Some(FieldKind::Exact) => (Some(&exact), exact_s),
+            None => (None, 0.0),
         };
         let t = Instant::now();
         let path = planner.plan(&setup, field, pair.start, pair.goal)?;
@@ -468,6 +606,8 @@ pub fn run_pair(
             relaxed: path.relaxed,
             dist_m: path.final_distance as f64,
             seconds,
+            goal_seconds,
+            room_seconds: room.room_seconds(planner),
             path_ratio: if path.reached && shortest > 0.0 {
                 path.length() as f64 / shortest
             } else {

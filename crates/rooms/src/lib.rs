@@ -11,7 +11,9 @@
 //! - [`ExactField3`] (fast marching over the accessible voxels, metres) and
 //!   [`LearnedField3`] (the goal-conditioned network of envfield-nets, trained per scene by
 //!   [`train_field3`]) are both [`ContinuousField3`](envfield_grid::ContinuousField3)s, so a
-//!   planner treats them alike.
+//!   planner treats them alike. Either becomes a [`VoxelField3`] once per goal (the fast
+//!   marching is one already; [`LearnedField3::tabulate`] is one batched network pass), so a
+//!   search step reads it by interpolation.
 //! - [`PoseFilter`] and the region as envfield-plan's [`StepFilter`](envfield_plan::space3::StepFilter)
 //!   and [`Space3`](envfield_plan::space3::Space3): what the 3D planners may step to.
 //! - [`harness`]: the room tables (paper Tables 3 and 4): planners by name
@@ -54,7 +56,7 @@ pub use draw::{
     MAX_SAMPLES, SAMPLES_PER_M2,
 };
 pub use error::{Result, RoomsError};
-pub use field3::{ExactField3, LearnedField3};
+pub use field3::{ExactField3, LearnedField3, VoxelField3};
 pub use field3_train::{train_field3, Field3Config, Field3Report};
 pub use nav::{offset, point, PoseFilter};
 pub use region::{

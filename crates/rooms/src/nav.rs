@@ -7,7 +7,7 @@ use envfield_grid::{Cell3, Point3m, SplitMix64};
 use envfield_plan::space3::{Space3, StepFilter};
 use envfield_plan::PlanError;
 use envfield_scene::nalgebra::{Point3, Vector3};
-use envfield_scene::Scene;
+use envfield_scene::{DistanceGrid, Scene};
 
 /// The region's free space: a torso is allowed in an accessible voxel. Samples are uniform
 /// over the accessible voxels, each jittered within its voxel.
@@ -63,6 +63,11 @@ pub struct PoseFilter<'a> {
     pub face_the_move: bool,
     /// The checks' tolerances.
     pub affordance: AffordanceConfig,
+    /// The scene's distances sampled once per room: when set, the search's checks
+    /// ([`StepFilter::keep`]) read them instead of the scene, a few lookups per joint instead
+    /// of a pass over the scene's parts. [`PoseFilter::poses_along`], which scores a path,
+    /// always checks against the scene itself.
+    pub distances: Option<&'a DistanceGrid>,
 }
 
 impl PoseFilter<'_> {
@@ -165,7 +170,11 @@ impl StepFilter for PoseFilter<'_> {
                     return Ok(false);
                 }
                 let pose = self.placed(step, from, c);
-                check_pose(self.scene, &pose, support, &self.affordance)
+                let report = match self.distances {
+                    Some(grid) => check_pose(grid, &pose, support, &self.affordance),
+                    None => check_pose(self.scene, &pose, support, &self.affordance),
+                };
+                report
                     .map(|r| r.valid())
                     .map_err(|e| PlanError::Invalid(format!("pose check: {e}")))
             })

@@ -22,6 +22,7 @@ pub fn planner_colour(planner: PlannerKind) -> [u8; 3] {
         PlannerKind::RrtStarBig => [200, 80, 200],
         PlannerKind::Prm => [20, 170, 190],
         PlannerKind::Line => [90, 90, 90],
+        PlannerKind::Navmesh => [240, 200, 40],
     }
 }
 

@@ -42,15 +42,16 @@ impl Tally {
             .collect()
     }
 
-    /// Table 3 as JSON keys into `line` (`<planner>_reach_pct`, `_dist_m`, `_s`,
-    /// `_path_ratio`, `_support_pct`, `_free_pct`, `_valid_pct`, and for ours `_no_route_pct`
-    /// and `_relaxed_pct`) and as text rows.
+    /// Table 3 as JSON keys into `line` (`<planner>_reach_pct`, `_dist_m`, `_s` (per path),
+    /// `_goal_s` (per goal), `_room_s` (per room), `_path_ratio`, `_support_pct`,
+    /// `_free_pct`, `_valid_pct`, and for ours `_no_route_pct` and `_relaxed_pct`) and as
+    /// text rows.
     pub fn table3(&self, planners: &[PlannerKind], line: &mut Value) -> String {
         let mut text = String::new();
         let _ = writeln!(
             text,
-            "{:<12} {:>9} {:>10} {:>11} {:>11}",
-            "planner", "reach %", "dist (m)", "s/path", "path ratio"
+            "{:<12} {:>9} {:>10} {:>11} {:>11} {:>11} {:>11}",
+            "planner", "reach %", "dist (m)", "s/path", "s/goal", "s/room", "path ratio"
         );
         for &planner in planners {
             let name = planner.name();
@@ -62,6 +63,7 @@ impl Tally {
                 |f: fn(&Outcome) -> f64| finite_mean(&os.iter().map(|o| f(o)).collect::<Vec<_>>());
             let reach = pct(|o| o.reached);
             let (dist, secs, ratio) = (m(|o| o.dist_m), m(|o| o.seconds), m(|o| o.path_ratio));
+            let (goal_s, room_s) = (m(|o| o.goal_seconds), m(|o| o.room_seconds));
             line[format!("{name}_reach_pct")] = reach.into();
             if planner.field().is_some() {
                 line[format!("{name}_no_route_pct")] = pct(|o| o.no_route).into();
@@ -69,15 +71,19 @@ impl Tally {
             }
             line[format!("{name}_dist_m")] = dist.into();
             line[format!("{name}_s")] = secs.into();
+            line[format!("{name}_goal_s")] = goal_s.into();
+            line[format!("{name}_room_s")] = room_s.into();
             line[format!("{name}_path_ratio")] = ratio.into();
             line[format!("{name}_support_pct")] = m(|o| o.poses.support).into();
             line[format!("{name}_free_pct")] = m(|o| o.poses.free).into();
             line[format!("{name}_valid_pct")] = m(|o| o.poses.valid).into();
             let _ = writeln!(
                 text,
-                "{name:<12} {reach:>9.1} {:>10.3} {:>11.5} {:>11}",
+                "{name:<12} {reach:>9.1} {:>10.3} {:>11.5} {:>11.5} {:>11.5} {:>11}",
                 dist.unwrap_or(f64::NAN),
                 secs.unwrap_or(f64::NAN),
+                goal_s.unwrap_or(f64::NAN),
+                room_s.unwrap_or(f64::NAN),
                 ratio.map_or("-".into(), |r| format!("{r:.3}"))
             );
         }

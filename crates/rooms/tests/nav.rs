@@ -74,6 +74,7 @@ fn only_the_search_with_affordance_keeps_every_pose_valid() {
         repeat: true,
         face_the_move: true,
         affordance: Default::default(),
+        distances: None,
     };
     let search = FieldSearch3 {
         step,
@@ -123,4 +124,121 @@ fn only_the_search_with_affordance_keeps_every_pose_valid() {
     assert!(cut.length() <= ours.length() + 1e-4);
     let cut_valid = share(&cut.points);
     assert!(cut_valid > 0.999, "ours with cuts: {cut_valid}");
+}
+
+/// A floor planner that walks the straight line: stands in for the navigation mesh the
+/// example builds.
+struct Straight;
+
+impl envfield_rooms::harness::FloorPlanner for Straight {
+    fn floor_path(
+        &self,
+        start: [f32; 3],
+        goal: [f32; 3],
+    ) -> envfield_rooms::Result<Option<Vec<[f32; 3]>>> {
+        Ok(Some(vec![start, goal]))
+    }
+    fn bytes(&self) -> usize {
+        0
+    }
+}
+
+/// The harness splits each planner's work as a navigation mesh does: ours' distance grid once
+/// per room, its field once per goal (the learned one tabulated in one pass, equal to the
+/// network at the voxel centres), lookups per path; its checks on the grid keep every pose of
+/// the cabinet room valid as the scene's own checks do; a navigation mesh asked for and not
+/// given is an error that says so.
+#[test]
+fn ours_reads_its_field_and_distances_once_and_the_costs_are_split() {
+    use envfield_grid::ContinuousField3;
+    use envfield_nets::{FieldNet, GoalConfig, ModelConfig};
+    use envfield_rooms::harness::{
+        run_pair, Pair, PairKind, PlannerKind, RoomContext, RunSettings,
+    };
+    use envfield_rooms::LearnedField3;
+
+    let scene = scene();
+    let gait = walk(&WalkConfig::default(), 1).unwrap();
+    let z = gait.frames[0].torso().z;
+    let config = RegionConfig::default();
+    let mut kept = Vec::new();
+    for i in 0..80 {
+        for j in 0..40 {
+            let p = [0.025 + 0.05 * i as f32, 0.025 + 0.05 * j as f32, z];
+            if afford(&scene, p, &config).unwrap().kept() {
+                kept.push(p);
+            }
+        }
+    }
+    let region = AccessibleRegion::from_samples(&scene, kept, 0.1).unwrap();
+    let net = FieldNet::new(
+        ModelConfig::Goal(GoalConfig {
+            extent: region.frame.shape.to_vec(),
+            mlp: Default::default(),
+            encoding: Default::default(),
+            detour: true,
+        }),
+        0,
+    )
+    .unwrap();
+    let (start, goal) = ([0.5, 0.2, z], [3.5, 1.5, z]);
+    let goal_cell = region.cell(goal, "goal").unwrap();
+    let learned = LearnedField3::new(&net, &region, goal_cell).unwrap();
+    let table = learned.tabulate(&region).unwrap();
+    for &i in region.free_indices().iter().step_by(7) {
+        let c = region.grid.cell(i);
+        let p = region.frame.center(c);
+        let (a, b) = (
+            learned.value([p.x, p.y, p.z]).unwrap(),
+            table.value([p.x, p.y, p.z]).unwrap(),
+        );
+        assert!(
+            (a - b).abs() <= 1e-3 * a.abs().max(1.0),
+            "{c:?}: {a} vs {b}"
+        );
+    }
+    assert!(table.voxels().values().iter().any(|v| v.is_infinite()));
+
+    let (distances, distances_s) = RoomContext::distances(&scene).unwrap();
+    assert!(distances_s > 0.0 && distances.bytes() > 0);
+    let pair = Pair {
+        start,
+        goal,
+        sequence: gait,
+        repeat: true,
+        kind: PairKind::Walk,
+    };
+    let mut room = RoomContext {
+        scene: &scene,
+        region: &region,
+        net: &net,
+        distances: &distances,
+        distances_s,
+        navmesh: None,
+    };
+    let settings = RunSettings {
+        budget: 20.0,
+        big_budget: 1000,
+        seed: 1,
+    };
+    let e = run_pair(&room, &pair, &[PlannerKind::Navmesh], &settings)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("no navigation mesh"), "{e}");
+    room.navmesh = Some((&Straight, 0.25));
+    let planners = [
+        PlannerKind::OursExact,
+        PlannerKind::Ours,
+        PlannerKind::Navmesh,
+    ];
+    let runs = run_pair(&room, &pair, &planners, &settings).unwrap();
+    let exact = &runs[0].outcome;
+    assert!(exact.reached, "{exact:?}");
+    assert!(exact.poses.valid > 99.9, "on the grid: {exact:?}");
+    assert!(exact.goal_seconds > 0.0 && exact.room_seconds == distances_s);
+    assert!(runs[1].outcome.goal_seconds > 0.0);
+    let mesh = &runs[2].outcome;
+    assert!(mesh.reached && mesh.room_seconds == 0.25 && mesh.goal_seconds == 0.0);
+    // The straight line through the cabinet: its poses collide.
+    assert!(mesh.poses.valid < 99.0, "{mesh:?}");
 }

@@ -4,7 +4,8 @@
 //! - [`Scene`]: objects ([`SceneObject`]) made of [`Part`]s, primitives ([`Primitive`]:
 //!   boxes, balls, capsules, cylinders) or triangle meshes, with the signed distance at any
 //!   point (negative inside), the nearest surface point and normal ([`Scene::closest`]), ray
-//!   casts and batched queries in parallel ([`Scene::signed_distances`]).
+//!   casts and batched queries in parallel ([`Scene::signed_distances`]). A
+//!   [`DistanceGrid`] samples it once for fast approximate reads ([`SignedDistance`]).
 //! - [`TriangleMesh`]: OBJ and PLY input and output (a scanned room is one mesh,
 //!   [`Scene::from_mesh`]); point clouds and paths export with [`write_point_cloud`] and
 //!   [`write_polyline_obj`].
@@ -32,6 +33,7 @@
 
 mod error;
 mod floor;
+mod grid;
 mod import;
 mod mesh;
 mod ply;
@@ -41,6 +43,7 @@ mod scene;
 
 pub use error::{Result, SceneError};
 pub use floor::{floor_map, FloorMap, FloorMapConfig, MapFrame};
+pub use grid::{DistanceGrid, SignedDistance};
 pub use import::{import_mesh, read_scene, ImportConfig, ImportReport, Units, UpAxis};
 pub use mesh::{write_point_cloud, write_polyline_obj, TriangleMesh};
 pub use room::{generate_room, Furniture, Room, RoomConfig};
