@@ -2,7 +2,8 @@
 //! (`docs/evaluation.md`).
 //!
 //! With no arguments it runs the shipped models: the learned field (`models/context.safetensors`)
-//! and VIN (`models/vin_{8,16,28}.safetensors`, picked by maze size) beside A* and fast
+//! and VIN (`models/vin_{8,16,28}.safetensors`: the maze's side, else the nearest trained side
+//! with K set for the maze) beside A* and fast
 //! marching, on VIN's test sets under the `vin` rule when `../shared/data/vin/` is there, and
 //! on generated gridworlds otherwise.
 //!
@@ -80,7 +81,8 @@ struct Args {
     candidates: usize,
     /// Weights for `field` or `hyper` (default: models/context.safetensors or
     /// models/hyper.safetensors; a file named <arch>_<size>.safetensors there wins for mazes of
-    /// that size). VIN always loads models/vin_<size>.safetensors unless this names a VIN file.
+    /// that size). VIN loads models/vin_<size>.safetensors (else the nearest trained side's, K
+    /// set for the maze) unless this names a VIN file.
     /// Several files, comma-separated, make an ensemble: the mean of their fields.
     #[arg(long)]
     model: Option<PathBuf>,

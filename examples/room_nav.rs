@@ -1,17 +1,11 @@
-//! Human navigation in 3D rooms (paper section 4.2, Tables 3 and 4): the pose-dependent search
-//! on the learned 3D field, with and without affordance, on the exact field, and RRT, RRT*,
-//! PRM and the straight line on the same accessible region and collision test; every path is
-//! fitted with the pose sequence and its poses checked.
-//!
-//! Ours (`ours`, `ours_exact`) is the search under the pose filter, then the region alone
-//! where the poses allow no route within the budget (`--budget`, expansions per step of the
-//! shortest walk; `FieldSearch3::search_relaxed`), then straight cuts the pose filter allows
-//! (`FieldSearch3::shortcut`). Its field is made once per goal (fast marching, or the learned
-//! field in one batched pass) and its pose checks read the scene's distances sampled once per
-//! room, so each step is lookups. `ours_raw` is the paper's search alone (a network pass per
-//! step, checks against the scene), and `ours_noaff` the search and cuts under the region
-//! alone. `navmesh` is the games' planner: a navigation mesh of the floor (Recast's pipeline
-//! in Rust) and Polyanya's shortest paths on it. Every planner's time is split per path
+//! Human navigation in 3D rooms (paper section 4.2, Tables 3 and 4). Ours (`ours`,
+//! `ours_exact`): the pose-dependent search on the learned (or exact) 3D field under the pose
+//! filter, the region alone where the poses allow no route within `--budget`, then straight
+//! cuts the filter allows; its field is made once per goal and its checks read the scene's
+//! distances sampled once per room. `ours_raw` is the paper's search alone, `ours_noaff` ours
+//! under the region alone; RRT, RRT*, PRM and the line share the region and collision test;
+//! `navmesh` is a navigation mesh of the floor (Recast in Rust) queried by Polyanya. Every
+//! path wears the same pose sequence, checked against the scene. Times are split per path
 //! (`<planner>_s`), per goal (`_goal_s`) and per room (`_room_s`).
 //!
 //! ```text
@@ -21,28 +15,20 @@
 //! cargo run --release --example room_nav -- --scene room.obj          # a scene of your own
 //! ```
 //!
-//! Walking pairs join two standing places of the accessible region at least a metre apart;
-//! sit-down pairs start where the sit-down sequence starts in front of a seat and end seated.
-//! Writes `scene.obj`, `region.ply`, `path_<planner>.obj`, `poses_<planner>.json` (the first
-//! pair's aligned poses), `top.png` (every planner's first path over the floor) and `room.png`
-//! (the room ray-cast from above one wall, the paths and five of ours' poses drawn) to `--out`.
-//! The last line is one JSON object (`--json`).
-
+//! Walking pairs join standing places of the region at least a metre apart; sit-down pairs
+//! go from in front of a seat to seated. The first pair's scene, region, paths, poses and
+//! pictures (`top.png`, `room.png`) go to `--out`; the last line is JSON (`--json`).
 use anyhow::{bail, Context, Result};
 use clap::Parser;
 use envfield::affordance::{walk, WalkConfig};
 use envfield::nets::{FieldNet, ModelConfig};
-use envfield::rooms::harness::{
-    pairs, run_pair, PairKind, PlannerKind, RoomContext, Run, RunSettings,
-};
-use envfield::rooms::pictures::{room_view, top_view};
+use envfield::rooms::harness::{pairs, run_pair, PairKind, PlannerKind, RoomContext, RunSettings};
+use envfield::rooms::pictures::write_run_files;
 use envfield::rooms::tables::{finite_mean, Tally};
 use envfield::rooms::{
-    check_sample_density, point, region_key, sample_region, train_field3, AccessibleRegion,
-    Field3Config,
+    check_sample_density, region_key, sample_region, train_field3, AccessibleRegion, Field3Config,
 };
-use envfield::scene::nalgebra::Point3;
-use envfield::scene::{generate_room, read_scene, write_polyline_obj, ImportConfig, Units, UpAxis};
+use envfield::scene::{generate_room, read_scene, ImportConfig, Units, UpAxis};
 use envfield::vae::Cvae;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
@@ -51,7 +37,7 @@ use std::time::Instant;
 #[path = "shared/navmesh.rs"]
 mod navmesh;
 use envfield::rooms::harness::FloorPlanner;
-use navmesh::{Navmesh, NavmeshConfig};
+use navmesh::Navmesh;
 
 #[global_allocator]
 static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
@@ -198,28 +184,6 @@ fn room_field(
     Ok((net, Some(report.train_s)))
 }
 
-/// The first pair's files: the scene, the region, every planner's path and poses, and the
-/// two pictures.
-fn write_first(out: &Path, room: &RoomContext, runs: &[Run]) -> Result<()> {
-    room.scene.to_mesh().write(out.join("scene.obj"))?;
-    room.region.write_ply(out.join("region.ply"))?;
-    for run in runs {
-        let line: Vec<Point3<f32>> = run.path.iter().map(|&p| point(p)).collect();
-        if line.len() > 1 {
-            write_polyline_obj(&line, out.join(format!("path_{}.obj", run.planner)))?;
-        }
-        run.poses
-            .write(out.join(format!("poses_{}.json", run.planner)))?;
-    }
-    let drawn: Vec<_> = runs.iter().map(|r| (r.planner, r.path.clone())).collect();
-    top_view(room.region, &drawn).write_png(out.join("top.png"))?;
-    // A few of ours' poses, evenly along its path.
-    let ours = &runs[0].poses.frames;
-    let skeletons: Vec<_> = (0..5).map(|j| ours[j * (ours.len() - 1) / 4]).collect();
-    room_view(room.scene, &drawn, &skeletons)?.write_png(out.join("room.png"))?;
-    Ok(())
-}
-
 fn main() -> Result<()> {
     let args = Args::parse();
     if args.rooms == 0 || args.rooms > 1000 || args.pairs == 0 || args.pairs > 10_000 {
@@ -283,28 +247,7 @@ fn main() -> Result<()> {
         let (net, trained_s) = room_field(&args, k, seed, &region)?;
         field_s.extend(trained_s);
         let (distances, distances_s) = RoomContext::distances(&scene)?;
-        let gait = walk(&WalkConfig::default(), seed)?;
-        let mesh = match Navmesh::build(&scene, &NavmeshConfig::for_gait(&gait)) {
-            Ok(m) => {
-                eprintln!(
-                    "room {seed}: navigation mesh of {} polygons, {} vertices, {:.1} ms",
-                    m.polygons,
-                    m.vertices,
-                    1e3 * m.build_s
-                );
-                Some(m)
-            }
-            Err(e) => {
-                eprintln!("room {seed}: no navigation mesh, its row is left out: {e}");
-                None
-            }
-        };
-        memory.push([
-            region.grid.len(),
-            distances.bytes(),
-            4 * region.grid.len(),
-            mesh.as_ref().map_or(0, |m| m.bytes()),
-        ]);
+        let mesh = Navmesh::for_room(&scene, &walk(&WalkConfig::default(), seed)?, seed);
         let room_planners: Vec<PlannerKind> = planners
             .into_iter()
             .filter(|&p| p != PlannerKind::Navmesh || mesh.is_some())
@@ -317,6 +260,7 @@ fn main() -> Result<()> {
             distances_s,
             navmesh: mesh.as_ref().map(|m| (m as &dyn FloorPlanner, m.build_s)),
         };
+        memory.push(room.bytes());
         let ps = pairs(generated.as_ref(), &scene, &region, args.pairs, seed)?;
         for (i, pair) in ps.iter().enumerate() {
             let budget = match pair.kind {
@@ -330,7 +274,7 @@ fn main() -> Result<()> {
             };
             let runs = run_pair(&room, pair, &room_planners, &settings)?;
             if k == 0 && i == 0 {
-                write_first(&args.out, &room, &runs)?;
+                write_run_files(&args.out, &scene, &region, &runs)?;
             }
             tally.add(pair.kind, &runs);
         }
@@ -341,12 +285,9 @@ fn main() -> Result<()> {
     let table4 = tally.table4(&planners, &mut line);
     line["field_train_s_per_room"] = finite_mean(&field_s).into();
     line["region_s_per_room"] = finite_mean(&region_s).into();
-    // Bytes per room: the region's voxels, the distance grid, one goal's field table, the
-    // navigation mesh.
-    let names = ["region", "distances", "field_per_goal", "navmesh"];
-    for (j, name) in names.iter().enumerate() {
-        let v: Vec<f64> = memory.iter().map(|m: &[usize; 4]| m[j] as f64).collect();
-        line[format!("{name}_bytes_per_room")] = finite_mean(&v).into();
+    for (j, (name, _)) in memory.first().into_iter().flatten().enumerate() {
+        let v: Vec<f64> = memory.iter().map(|m| m[j].1 as f64).collect();
+        line[format!("{name}_per_room")] = finite_mean(&v).into();
     }
     if !args.json {
         println!("Table 3: {} pairs in {} room(s)", tally.pairs(), args.rooms);

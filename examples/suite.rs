@@ -15,7 +15,9 @@
 //!   without learning;
 //! - `octile`: the straight-line distance, blind to walls;
 //! - `exact`: descent on the exact graph distance (the oracle);
-//! - `vin`: the VIN baseline where a model for the maze's side exists (8, 16, 28).
+//! - `vin`: the VIN baseline where a VIN of the maze's side was trained (8, 16, 28), and on
+//!   every side of VIN's own benchmark (the `vin`-rule sets) with the nearest trained side's
+//!   network and K set for the maze's side.
 //!
 //! Generated families are walked under the `strict` rule, except VIN-style gridworlds and
 //! VIN's test sets (the `vin` rule, VIN's benchmark). Minigrid layouts come from
@@ -27,7 +29,7 @@ use clap::Parser;
 use envfield::grid::{write_atomic, MoveRule};
 use envfield::mazes::{suite_sets, MazeSet};
 use envfield::models::ModelSource;
-use envfield::nets::{FieldNet, NetsError};
+use envfield::nets::{model_file, FieldNet, NetsError};
 use envfield::plan::{evaluate, EvalConfig, FieldDescent, PlannerKind, PlannerOptions, Summary};
 use std::path::{Path, PathBuf};
 
@@ -130,6 +132,7 @@ fn main() -> Result<()> {
             ..PlannerOptions::default()
         };
         let file = source.file("context", size)?;
+        let own_vin = model_file(&source.dir, "vin", size).is_ok();
         let mut untrained = FieldNet::new(FieldNet::load(&file)?.config().clone(), 1)?;
         untrained.set_rule(set.rule);
         if shipped.is_none() {
@@ -147,7 +150,11 @@ fn main() -> Result<()> {
                 "relay" => Some(PlannerKind::Relay),
                 "octile" => Some(PlannerKind::Octile),
                 "exact" => Some(PlannerKind::Graph),
-                "vin" if !args.no_vin => Some(PlannerKind::Vin),
+                // VIN on every side of its own benchmark (the `vin`-rule sets), elsewhere
+                // where a VIN of the side was trained.
+                "vin" if !args.no_vin && (set.rule == MoveRule::Vin || own_vin) => {
+                    Some(PlannerKind::Vin)
+                }
                 _ => None,
             };
             let report = match (column, kind) {

@@ -97,8 +97,9 @@ impl ModelSource {
 
 impl ModelSource {
     /// VIN's own file for the size in the folder, loaded. A side without a file of its own
-    /// gets the VIN trained on the largest side below it, with K raised for its side
-    /// ([`VinConfig::for_size`]): VIN's way to plan on larger maps than it saw.
+    /// gets the VIN trained on the nearest side (the larger one on a tie) with K set for its
+    /// own side ([`VinConfig::for_size`]): VIN is convolutional, and its paper raises K with
+    /// the map.
     fn own_vin(&self, size: usize) -> Result<(PathBuf, Vin)> {
         match model_file(&self.dir, "vin", size) {
             Ok(file) => {
@@ -106,11 +107,11 @@ impl ModelSource {
                 Ok((file, vin))
             }
             Err(missing) => {
-                let below = (1..size)
-                    .rev()
-                    .map(|s| self.dir.join(format!("vin_{s}.safetensors")))
-                    .find(|p| p.is_file());
-                let Some(file) = below else {
+                let nearest = (1..=MAX_VIN_SIDE)
+                    .map(|s| (s, self.dir.join(format!("vin_{s}.safetensors"))))
+                    .filter(|(_, p)| p.is_file())
+                    .min_by_key(|&(s, _)| (s.abs_diff(size), std::cmp::Reverse(s)));
+                let Some((_, file)) = nearest else {
                     return Err(missing);
                 };
                 let vin =
@@ -120,6 +121,9 @@ impl ModelSource {
         }
     }
 }
+
+/// The largest side a `vin_<side>.safetensors` file is looked for at.
+const MAX_VIN_SIDE: usize = 512;
 
 /// Whether the first of the comma-separated files `p` is a field model's weight file.
 fn first_is_field_file(p: &Path) -> bool {
@@ -170,7 +174,7 @@ mod tests {
     }
 
     #[test]
-    fn vin_on_a_larger_side_is_the_largest_trained_one_with_k_raised() {
+    fn a_side_without_its_vin_gets_the_nearest_trained_one_with_its_own_k() {
         let source = shipped();
         let (file, learned) = source.load("vin", 64).unwrap();
         assert_eq!(file, source.dir.join("vin_28.safetensors"));
@@ -180,6 +184,16 @@ mod tests {
         assert_eq!(policy.name(), "vin");
         let vin = source.own_vin(48).unwrap().1;
         assert_eq!(vin.config().iterations, VinConfig::for_size(48).iterations);
-        assert!(source.own_vin(4).is_err(), "no VIN below 8 cells");
+        assert_eq!(
+            source.own_vin(14).unwrap().0,
+            source.dir.join("vin_16.safetensors")
+        );
+        // 12 lies between 8 and 16: the larger wins the tie.
+        assert_eq!(
+            source.own_vin(12).unwrap().0,
+            source.dir.join("vin_16.safetensors")
+        );
+        let empty = ModelSource::new(std::env::temp_dir().join("envfield-no-models-here"));
+        assert!(empty.own_vin(16).is_err());
     }
 }

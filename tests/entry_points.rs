@@ -488,6 +488,23 @@ fn room_nav_refuses_planted_fields_and_keeps_what_links_point_at() {
         "{}",
         String::from_utf8_lossy(&done.stderr)
     );
+    // Every planner's three costs (issue 34), the navigation mesh among them.
+    let stdout = String::from_utf8_lossy(&done.stdout);
+    let line: serde_json::Value =
+        serde_json::from_str(stdout.lines().last().unwrap_or_default()).unwrap();
+    for planner in ["ours", "ours_exact", "ours_raw", "prm", "navmesh"] {
+        for cost in ["s", "goal_s", "room_s"] {
+            let key = format!("{planner}_{cost}");
+            assert!(
+                line[&key].as_f64().is_some_and(|v| v >= 0.0),
+                "{key}: {line}"
+            );
+        }
+    }
+    assert!(
+        line["ours_goal_s"].as_f64() > Some(0.0) && line["navmesh_room_s"].as_f64() > Some(0.0)
+    );
+    assert!(line["distances_bytes_per_room"].as_f64() > Some(0.0));
     assert_eq!(std::fs::read_to_string(&victim).unwrap(), "keep");
     assert!(!std::fs::symlink_metadata(out.join("top.png"))
         .unwrap()

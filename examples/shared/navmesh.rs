@@ -159,6 +159,29 @@ impl Navmesh {
     }
 }
 
+impl Navmesh {
+    /// The room's navigation mesh for the walking body of `gait`, its size and build time
+    /// printed, or `None` (said, with the reason) where Recast builds none.
+    #[allow(dead_code)] // room_nav's; the bench builds its own.
+    pub fn for_room(scene: &Scene, gait: &PoseSequence, seed: u64) -> Option<Self> {
+        match Self::build(scene, &NavmeshConfig::for_gait(gait)) {
+            Ok(m) => {
+                eprintln!(
+                    "room {seed}: navigation mesh of {} polygons, {} vertices, {:.1} ms",
+                    m.polygons,
+                    m.vertices,
+                    1e3 * m.build_s
+                );
+                Some(m)
+            }
+            Err(e) => {
+                eprintln!("room {seed}: no navigation mesh, its row is left out: {e}");
+                None
+            }
+        }
+    }
+}
+
 impl FloorPlanner for Navmesh {
     /// Polyanya's shortest path on the floor plane, its corners lifted to the torso's height
     /// (from the start's to the goal's along the path), the start and goal at its ends.

@@ -99,6 +99,41 @@ pub fn check_pose<S: SignedDistance + ?Sized>(
     Ok(report(distances, support, config))
 }
 
+/// Whether `pose` is supported and collision-free: [`check_pose`]'s
+/// [`AffordanceReport::valid`], stopping at the first joint that decides it. A search asks
+/// this of thousands of candidates, most of them refused by one joint inside geometry.
+///
+/// # Errors
+/// As [`check_pose`].
+pub fn pose_valid<S: SignedDistance + ?Sized>(
+    scene: &S,
+    pose: &Pose,
+    support: Support,
+    config: &AffordanceConfig,
+) -> Result<bool> {
+    config.validate()?;
+    pose.validate()?;
+    let support_joints = support.joints();
+    for j in Joint::ALL.iter().filter(|j| !support_joints.contains(j)) {
+        if scene.distance_at(&pose.joints[j.index()])? < -config.collision_margin {
+            return Ok(false);
+        }
+    }
+    let mut resting = 0;
+    for j in support_joints {
+        let d = scene.distance_at(&pose.joints[j.index()])?;
+        if d <= config.contact_tolerance && d >= -config.max_penetration {
+            resting += 1;
+            if support.any_joint_suffices() {
+                return Ok(true);
+            }
+        } else if !support.any_joint_suffices() {
+            return Ok(false);
+        }
+    }
+    Ok(resting == support_joints.len() || (support.any_joint_suffices() && resting > 0))
+}
+
 fn report(
     distances: [f32; JOINT_COUNT],
     support: Support,

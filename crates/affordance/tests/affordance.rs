@@ -334,3 +334,42 @@ fn sequences_round_trip_through_json_and_reject_bad_files() {
     assert_eq!(reordered.frames, s.frames);
     assert!(reordered.supports.iter().all(|&x| x == Support::Standing));
 }
+
+/// The early-stopping check answers as the full report does, for standing, sitting and lying
+/// frames placed all over the room (on the floor, in mid-air, sunk into furniture), on the
+/// scene and on its distance grid.
+#[test]
+fn pose_valid_agrees_with_the_full_report() {
+    use envfield_affordance::pose_valid;
+    use envfield_scene::DistanceGrid;
+    let scene = room();
+    let grid = DistanceGrid::around(&scene, 0.2, 0.03).unwrap();
+    let mut sequences = vec![walk(&WalkConfig::default(), 3).unwrap()];
+    sequences.push(sit_down(&SitConfig::default()).unwrap());
+    sequences.push(lie_down(&LieConfig::default()).unwrap());
+    let mut rng = envfield_grid::SplitMix64::new(11);
+    let (mut valid, mut total) = (0, 0);
+    for seq in &sequences {
+        for (frame, &support) in seq.frames.iter().zip(&seq.supports) {
+            for _ in 0..40 {
+                let shift = Vector3::new(
+                    3.0 * rng.next_f32() - 1.0,
+                    3.0 * rng.next_f32() - 1.0,
+                    0.6 * rng.next_f32() - 0.3,
+                );
+                let pose = frame.translated(&shift);
+                let full = check_pose(&scene, &pose, support, &cfg()).unwrap().valid();
+                assert_eq!(pose_valid(&scene, &pose, support, &cfg()).unwrap(), full);
+                let on_grid = check_pose(&grid, &pose, support, &cfg()).unwrap().valid();
+                assert_eq!(pose_valid(&grid, &pose, support, &cfg()).unwrap(), on_grid);
+                valid += usize::from(full);
+                total += 1;
+            }
+        }
+    }
+    // Both answers occur.
+    assert!(
+        valid > total / 20 && valid < total - total / 20,
+        "{valid} of {total}"
+    );
+}

@@ -14,16 +14,18 @@ fn folder_of(path: &Path) -> PathBuf {
 /// exclusively under an unpredictable name (so a file or link planted there is never written
 /// through), flushed to disk, then renamed over `path`. A reader never sees a half-written
 /// file, an existing file is only replaced once the new one is complete, and a symbolic link
-/// at `path` is replaced rather than followed.
+/// at `path` is replaced rather than followed. A temporary file that a killed process left in
+/// the folder (`.envfield-*.tmp`, untouched for ten minutes) is removed first.
 ///
 /// # Errors
 /// [`GridError::Io`] naming the path; [`GridError::Invalid`] for a path that names a folder.
 pub fn write_atomic(path: impl AsRef<Path>, bytes: &[u8]) -> Result<()> {
     let path = path.as_ref();
     check_file_path(path)?;
+    remove_stale_temporaries(&folder_of(path));
     let result = (|| {
         let mut builder = tempfile::Builder::new();
-        builder.prefix(".envfield-").suffix(".tmp");
+        builder.prefix(TEMP_PREFIX).suffix(TEMP_SUFFIX);
         // The mode a plain `File::create` gives (0666 less the umask), not tempfile's 0600.
         #[cfg(unix)]
         builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
@@ -34,6 +36,42 @@ pub fn write_atomic(path: impl AsRef<Path>, bytes: &[u8]) -> Result<()> {
         Ok(())
     })();
     result.map_err(|e: std::io::Error| GridError::io(path, e))
+}
+
+/// The names of [`write_atomic`]'s temporary files: `.envfield-<random>.tmp`.
+const TEMP_PREFIX: &str = ".envfield-";
+const TEMP_SUFFIX: &str = ".tmp";
+
+/// How long a temporary file goes untouched before it counts as left by a killed write (a
+/// write in progress touches its file every few milliseconds).
+const STALE_AFTER: std::time::Duration = std::time::Duration::from_secs(600);
+
+/// Removes the temporary files of [`write_atomic`] in `dir` that nobody has touched for
+/// [`STALE_AFTER`]: what an interrupted run left (a kill runs no destructor). Best effort: a
+/// folder that cannot be listed, or a file that cannot be removed, is left as it is.
+fn remove_stale_temporaries(dir: &Path) {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let name = name.to_string_lossy();
+        if !(name.starts_with(TEMP_PREFIX) && name.ends_with(TEMP_SUFFIX)) {
+            continue;
+        }
+        // Only plain files (never a link or folder planted under the pattern).
+        let Ok(meta) = entry.path().symlink_metadata() else {
+            continue;
+        };
+        let stale = meta
+            .modified()
+            .ok()
+            .and_then(|m| m.elapsed().ok())
+            .is_some_and(|age| age >= STALE_AFTER);
+        if meta.file_type().is_file() && stale {
+            let _ = std::fs::remove_file(entry.path());
+        }
+    }
 }
 
 /// That `path` names a file (not a folder) in a folder that exists.
@@ -83,6 +121,32 @@ mod tests {
         let d = std::env::temp_dir().join(format!("envfield-{name}-{}", std::process::id()));
         std::fs::create_dir_all(&d).unwrap();
         d
+    }
+
+    /// What a killed write left (a temporary file untouched for an hour) goes at the next
+    /// write to the folder; a fresh one (a write in progress elsewhere), other files, and a
+    /// folder under the pattern stay.
+    #[test]
+    fn a_killed_writes_temporary_file_is_removed_by_the_next_write() {
+        let dir = dir("stale");
+        let stale = dir.join(".envfield-abc123.tmp");
+        let fresh = dir.join(".envfield-def456.tmp");
+        let other = dir.join("notes.tmp");
+        let folder = dir.join(".envfield-folder.tmp");
+        for p in [&stale, &fresh, &other] {
+            std::fs::write(p, b"half").unwrap();
+        }
+        std::fs::create_dir_all(&folder).unwrap();
+        let hour_ago = std::time::SystemTime::now() - std::time::Duration::from_secs(3600);
+        for p in [&stale, &other] {
+            let f = std::fs::File::options().write(true).open(p).unwrap();
+            f.set_modified(hour_ago).unwrap();
+        }
+        write_atomic(dir.join("out.bin"), b"done").unwrap();
+        assert!(!stale.exists());
+        assert!(fresh.exists() && other.exists() && folder.is_dir());
+        assert_eq!(std::fs::read(dir.join("out.bin")).unwrap(), b"done");
+        std::fs::remove_dir_all(&dir).ok();
     }
 
     #[test]

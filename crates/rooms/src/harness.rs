@@ -487,6 +487,17 @@ impl RoomContext<'_> {
         Ok((grid, t.elapsed().as_secs_f64()))
     }
 
+    /// The bytes ours and the navigation mesh keep for the room, by name: `region_bytes` (a byte a voxel), `distances_bytes` (the distance grid),
+    /// `field_per_goal_bytes` (one goal's field table) and `navmesh_bytes` (0 without one).
+    pub fn bytes(&self) -> [(&'static str, usize); 4] {
+        [
+            ("region_bytes", self.region.grid.len()),
+            ("distances_bytes", self.distances.bytes()),
+            ("field_per_goal_bytes", 4 * self.region.grid.len()),
+            ("navmesh_bytes", self.navmesh.map_or(0, |(m, _)| m.bytes())),
+        ]
+    }
+
     /// The seconds `planner` spent on the room before any goal.
     pub fn room_seconds(&self, planner: PlannerKind) -> f64 {
         match planner {

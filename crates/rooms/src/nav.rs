@@ -2,7 +2,7 @@
 //! planners in envfield-plan ([`FieldSearch3`](envfield_plan::space3::FieldSearch3), RRT, RRT*, PRM).
 
 use crate::AccessibleRegion;
-use envfield_affordance::{check_pose, AffordanceConfig, PoseSequence};
+use envfield_affordance::{check_pose, pose_valid, AffordanceConfig, PoseSequence};
 use envfield_grid::{Cell3, Point3m, SplitMix64};
 use envfield_plan::space3::{Space3, StepFilter};
 use envfield_plan::PlanError;
@@ -170,13 +170,11 @@ impl StepFilter for PoseFilter<'_> {
                     return Ok(false);
                 }
                 let pose = self.placed(step, from, c);
-                let report = match self.distances {
-                    Some(grid) => check_pose(grid, &pose, support, &self.affordance),
-                    None => check_pose(self.scene, &pose, support, &self.affordance),
-                };
-                report
-                    .map(|r| r.valid())
-                    .map_err(|e| PlanError::Invalid(format!("pose check: {e}")))
+                match self.distances {
+                    Some(grid) => pose_valid(grid, &pose, support, &self.affordance),
+                    None => pose_valid(self.scene, &pose, support, &self.affordance),
+                }
+                .map_err(|e| PlanError::Invalid(format!("pose check: {e}")))
             })
             .collect()
     }

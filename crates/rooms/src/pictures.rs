@@ -1,12 +1,12 @@
 //! Pictures of rooms: a top view of the accessible region with paths, a ray-cast view of the
 //! room from above one wall with paths and poses, and a top view of a 3D field.
 
-use crate::harness::PlannerKind;
+use crate::harness::{PlannerKind, Run};
 use crate::{point, AccessibleRegion, Result, RoomsError};
 use envfield_affordance::{Joint, Pose};
 use envfield_grid::{Canvas, Cell3, ContinuousField3, Field2, HeatMapStyle, Point3m};
 use envfield_scene::nalgebra::{Point3, Vector3};
-use envfield_scene::{ObjectKind, Scene};
+use envfield_scene::{write_polyline_obj, ObjectKind, Scene};
 use rayon::prelude::*;
 use std::path::Path;
 
@@ -202,5 +202,42 @@ pub fn write_field_view(
             ..HeatMapStyle::default()
         },
     )?;
+    Ok(())
+}
+
+/// One pair's files in `out`: the scene (`scene.obj`), the region (`region.ply`), every
+/// planner's path (`path_<planner>.obj`) and aligned poses (`poses_<planner>.json`), the top
+/// view of every path (`top.png`) and the ray-cast room with five of the first run's poses
+/// (`room.png`).
+///
+/// # Errors
+/// I/O errors naming the file; errors of the ray casts.
+pub fn write_run_files(
+    out: &Path,
+    scene: &Scene,
+    region: &AccessibleRegion,
+    runs: &[Run],
+) -> Result<()> {
+    scene.to_mesh().write(out.join("scene.obj"))?;
+    region.write_ply(out.join("region.ply"))?;
+    for run in runs {
+        let line: Vec<Point3<f32>> = run.path.iter().map(|&p| point(p)).collect();
+        if line.len() > 1 {
+            write_polyline_obj(&line, out.join(format!("path_{}.obj", run.planner)))?;
+        }
+        run.poses
+            .write(out.join(format!("poses_{}.json", run.planner)))?;
+    }
+    let drawn: Vec<_> = runs.iter().map(|r| (r.planner, r.path.clone())).collect();
+    top_view(region, &drawn).write_png(out.join("top.png"))?;
+    // A few of the first run's poses, evenly along its path.
+    let skeletons: Vec<Pose> = match runs.first() {
+        Some(run) if !run.poses.frames.is_empty() => {
+            let frames = &run.poses.frames;
+            (0..5).map(|j| frames[j * (frames.len() - 1) / 4]).collect()
+        }
+        _ => Vec::new(),
+    };
+    room_view(scene, &drawn, &skeletons)?.write_png(out.join("room.png"))?;
     Ok(())
 }

@@ -12,6 +12,14 @@ pub fn finite_mean(v: &[f64]) -> Option<f64> {
     (!f.is_empty()).then(|| f.iter().sum::<f64>() / f.len() as f64)
 }
 
+/// The median of the finite values, `None` for none.
+pub fn finite_median(v: &[f64]) -> Option<f64> {
+    let mut f: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
+    f.sort_by(f64::total_cmp);
+    let n = f.len();
+    (n > 0).then(|| (f[(n - 1) / 2] + f[n / 2]) / 2.0)
+}
+
 /// Every planner's outcomes, by pair kind.
 #[derive(Clone, Debug, Default)]
 pub struct Tally {
@@ -42,8 +50,8 @@ impl Tally {
             .collect()
     }
 
-    /// Table 3 as JSON keys into `line` (`<planner>_reach_pct`, `_dist_m`, `_s` (per path),
-    /// `_goal_s` (per goal), `_room_s` (per room), `_path_ratio`, `_support_pct`,
+    /// Table 3 as JSON keys into `line` (`<planner>_reach_pct`, `_dist_m`, `_s` (per path, and
+    /// `_s_median`), `_goal_s` (per goal), `_room_s` (per room), `_path_ratio`, `_support_pct`,
     /// `_free_pct`, `_valid_pct`, and for ours `_no_route_pct` and `_relaxed_pct`) and as
     /// text rows.
     pub fn table3(&self, planners: &[PlannerKind], line: &mut Value) -> String {
@@ -71,6 +79,8 @@ impl Tally {
             }
             line[format!("{name}_dist_m")] = dist.into();
             line[format!("{name}_s")] = secs.into();
+            let all: Vec<f64> = os.iter().map(|o| o.seconds).collect();
+            line[format!("{name}_s_median")] = finite_median(&all).into();
             line[format!("{name}_goal_s")] = goal_s.into();
             line[format!("{name}_room_s")] = room_s.into();
             line[format!("{name}_path_ratio")] = ratio.into();

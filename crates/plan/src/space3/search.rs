@@ -13,6 +13,34 @@ use envfield_grid::{ContinuousField3, Point3m};
 use serde::{Deserialize, Serialize};
 use std::cmp::Reverse;
 use std::collections::{BinaryHeap, HashSet};
+use std::hash::{BuildHasherDefault, Hasher};
+
+/// FxHash's multiply-rotate over the opened set's keys (small integer triples, hashed once
+/// per candidate): std's SipHash guards against chosen keys, which a search never meets, at
+/// several times the cost.
+#[derive(Default)]
+struct LatticeHasher(u64);
+
+impl LatticeHasher {
+    fn add(&mut self, x: u64) {
+        self.0 = (self.0.rotate_left(5) ^ x).wrapping_mul(0x517c_c1b7_2722_0a95);
+    }
+}
+
+impl Hasher for LatticeHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        bytes.iter().for_each(|&b| self.add(u64::from(b)));
+    }
+    fn write_i64(&mut self, i: i64) {
+        self.add(i as u64);
+    }
+    fn write_usize(&mut self, i: usize) {
+        self.add(i as u64);
+    }
+}
 
 /// The pose-dependent search's settings.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -83,7 +111,7 @@ impl FieldSearch3 {
             depth: 0,
             checked: true,
         }];
-        let mut opened = HashSet::new();
+        let mut opened: HashSet<[i64; 3], BuildHasherDefault<LatticeHasher>> = HashSet::default();
         let mut open = BinaryHeap::new();
         let start_value = values_or_infinity(field, &[start])[0];
         open.push(Reverse((Order(start_value), 0usize)));
