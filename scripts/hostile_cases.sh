@@ -40,7 +40,7 @@ run 6c 60 $BIN/train_maze --size 8 --mazes 4 --steps 1 --batch 100000000 --queri
 run 6d 60 $BIN/train_maze --size 8 --mazes 4 --steps 1 --encoder "100000000x[16:1]" --out $T/m.safetensors
 run 7 60 $BIN/maze_nav --size 8 --count 20 --planner vin --model $T/broken.safetensors
 cp models/hyper.safetensors $T/good.safetensors
-run 8a 60 $BIN/train_vin --size 8 --mazes 10 --steps 0 --eval-mazes 5 --out $T/good.safetensors
+run 8a 60 $BIN/train_vin --size 8 --mazes 10 --epochs 0 --eval-mazes 5 --out $T/good.safetensors
 printf '8a-kept\t%s\t%s\n' "$(cmp -s models/hyper.safetensors $T/good.safetensors; echo $?)" "$(cmp -s models/hyper.safetensors $T/good.safetensors && echo file kept || echo file replaced)"
 cp models/hyper.safetensors $T/good.safetensors
 run 8b 60 $BIN/train_maze --size 8 --mazes 4 --steps 0 --out $T/good.safetensors
@@ -56,8 +56,8 @@ try: b=open('$T/f.npy','rb').read()
 except OSError: print('no field written'); sys.exit()
 n=struct.unpack('<H',b[8:10])[0]; v=struct.unpack('<%df'%((len(b)-10-n)//4), b[10+n:])
 print(sum(1 for x in v if math.isnan(x)),'NaN cells in the field written')")"
-$BIN/train_vin --size 8 --mazes 10 --steps 3 --eval-mazes 5 --out $T/v8.safetensors > /dev/null 2>&1
-run 12a 60 $BIN/train_vin --size 16 --mazes 10 --steps 6 --eval-mazes 5 --resume $T/v8.safetensors.ckpt --out $T/v16.safetensors
+$BIN/train_vin --size 8 --mazes 10 --max-steps 3 --eval-mazes 5 --out $T/v8.safetensors > /dev/null 2>&1
+run 12a 60 $BIN/train_vin --size 16 --mazes 10 --max-steps 6 --eval-mazes 5 --resume $T/v8.safetensors.ckpt --out $T/v16.safetensors
 run 12b 20 $BIN/fmm $T/two.txt
 echo keep > $T/victim.txt
 run 13 20 sh -c "ln -sf $T/victim.txt $T/.f13.npy.\$\$.tmp; exec $BIN/fmm $T/grid.txt --out $T/f13.npy"

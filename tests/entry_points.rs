@@ -160,8 +160,10 @@ fn training_refuses_no_data_and_no_steps_and_keeps_the_file() {
         refuses(run(&train, &args), "lr must be positive");
     }
     if let Some(vin) = example("train_vin") {
-        let args = ["--size", "8", "--mazes", "4", "--steps", "0", "--out", &out];
-        refuses(run(&vin, &args), "trains nothing");
+        for zero in ["--epochs", "--max-steps"] {
+            let args = ["--size", "8", "--mazes", "4", zero, "0", "--out", &out];
+            refuses(run(&vin, &args), "trains nothing");
+        }
     }
     assert_eq!(
         std::fs::read(&good).unwrap(),

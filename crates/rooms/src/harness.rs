@@ -125,12 +125,17 @@ impl PlannerKind {
         Ok(match self {
             PlannerKind::Ours => search.search_relaxed(field()?, poses, region, start, goal)?,
             PlannerKind::OursRaw => {
-                // The paper's search checks its poses against the scene itself.
+                // The paper's search: its poses checked against the scene itself, no cap on
+                // the checks.
                 let exact = PoseFilter {
                     distances: None,
                     ..*poses
                 };
-                search.search(field()?, &exact, start, goal)?
+                let paper = FieldSearch3 {
+                    max_checks: 0,
+                    ..*search
+                };
+                paper.search(field()?, &exact, start, goal)?
             }
             PlannerKind::OursNoAff => {
                 let f = region as &dyn StepFilter;
@@ -537,12 +542,17 @@ impl<'a> PairSetup<'a> {
                 affordance: Default::default(),
                 distances,
             },
-            search: FieldSearch3 {
-                step,
-                tolerance: 0.02,
+            search: {
                 // A search that has not arrived by then is lost in a pocket the poses cannot
-                // leave, and ours falls back to the region alone.
-                max_steps: (budget * shortest.max(0.5) / step as f64) as usize + 200,
+                // leave, and ours falls back to the region alone. In such a pocket nearly
+                // every candidate's pose is refused: two checks per allowed expansion end it.
+                let max_steps = (budget * shortest.max(0.5) / step as f64) as usize + 200;
+                FieldSearch3 {
+                    step,
+                    tolerance: 0.02,
+                    max_steps,
+                    max_checks: 2 * max_steps,
+                }
             },
             sampling: SamplingConfig {
                 step: step.max(0.05),

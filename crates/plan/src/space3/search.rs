@@ -51,6 +51,11 @@ pub struct FieldSearch3 {
     pub tolerance: f32,
     /// Expansions at most (each one batched field query).
     pub max_steps: usize,
+    /// Filter calls at most (a pose check each, refused or not), 0 for no limit. Where the
+    /// filter refuses nearly everything (a pocket the poses cannot leave) a search spends its
+    /// expansions slowly and its checks fast; this stops it there.
+    #[serde(default)]
+    pub max_checks: usize,
 }
 
 impl FieldSearch3 {
@@ -65,7 +70,8 @@ impl FieldSearch3 {
     /// step would collide), the search goes on from the best point left instead of stopping.
     /// When the goal lies within `s` and the filter allows it, the path lands on it. The path
     /// is the chain of steps from the start to the point it ends on: the goal, or after
-    /// `max_steps` expansions the opened point nearest the goal (then `reached` is false). A
+    /// `max_steps` expansions (or `max_checks` filter calls) the opened point nearest the goal
+    /// (then `reached` is false). A
     /// step's filter call gets the step's index along that chain.
     ///
     /// # Errors
@@ -118,7 +124,7 @@ impl FieldSearch3 {
         let mut nearest = (distance(start, goal), 0usize);
         let mut end = None;
         let mut exhausted = false;
-        let mut expansions = 0;
+        let (mut expansions, mut checks) = (0, 0);
         loop {
             let Some(Reverse((_, n))) = open.pop() else {
                 exhausted = true;
@@ -135,8 +141,14 @@ impl FieldSearch3 {
             }
             // Lazy: a candidate's pose is checked when it comes off the list, so a clear
             // descent checks one pose per step rather than all 26.
-            if !checked && !filter.keep(depth - 1, nodes[parent].at, &[here])?[0] {
-                continue;
+            if !checked {
+                if self.max_checks > 0 && checks == self.max_checks {
+                    break;
+                }
+                checks += 1;
+                if !filter.keep(depth - 1, nodes[parent].at, &[here])?[0] {
+                    continue;
+                }
             }
             opened.insert(key(here));
             let d = distance(here, goal);
@@ -391,6 +403,7 @@ mod tests {
             step: 0.1,
             tolerance: 0.02,
             max_steps: 100_000,
+            max_checks: 0,
         };
         let path = search.search(&Cone(goal), &Cube, [0.0; 3], goal).unwrap();
         assert!(!path.reached && path.exhausted, "{path:?}");
@@ -408,6 +421,7 @@ mod tests {
             step: 0.1,
             tolerance: 0.02,
             max_steps: 200,
+            max_checks: 0,
         };
         let path = search
             .search(&Cone(goal), &AnyStep, [0.0, 0.0, 1.0], goal)
@@ -433,6 +447,7 @@ mod tests {
             step: 0.1,
             tolerance: 0.02,
             max_steps: 100,
+            max_checks: 0,
         };
         let path = search
             .search(&Cone(goal), &Above(0.5), [0.0, 0.0, 1.0], goal)
@@ -475,6 +490,7 @@ mod tests {
             step: 0.05,
             tolerance: 0.02,
             max_steps: 10_000,
+            max_checks: 0,
         };
         let raw = search.search(&Cone(goal), &Outside, start, goal).unwrap();
         assert!(raw.reached, "{raw:?}");
@@ -519,6 +535,7 @@ mod tests {
             step: 0.1,
             tolerance: 0.02,
             max_steps: 5_000,
+            max_checks: 0,
         };
         let strict = search.search(&Cone(goal), &Pocket, [0.0; 3], goal).unwrap();
         assert!(!strict.reached);
