@@ -100,33 +100,41 @@ fn sitting_pairs(room: &Room, region: &AccessibleRegion, seed: u64) -> Vec<Timed
         .collect()
 }
 
-/// One path of `planner` on pair `t` (its fields made before, as in `room_nav`).
-#[allow(clippy::too_many_arguments)]
-fn plan(
-    planner: PlannerKind,
-    room: &Room,
-    region: &AccessibleRegion,
-    distances: &DistanceGrid,
-    navmesh: &dyn FloorPlanner,
-    t: &Timed,
-    field: Option<&dyn ContinuousField3>,
-    budget: f64,
-) -> bool {
-    let mut setup = PairSetup::new(
-        &room.scene,
-        region,
-        Some(distances),
-        &t.pair,
-        t.shortest,
-        budget,
-        5000,
-        SamplingConfig::default().seed,
-    );
-    setup.navmesh = Some(navmesh);
-    let path = planner
-        .plan(&setup, field, t.pair.start, t.pair.goal)
-        .expect("plan");
-    black_box(path).reached
+/// What every path of a room shares: the room, a region, the distance grid, the navigation
+/// mesh.
+struct Shared<'a> {
+    room: &'a Room,
+    region: &'a AccessibleRegion,
+    distances: &'a DistanceGrid,
+    navmesh: &'a dyn FloorPlanner,
+}
+
+impl Shared<'_> {
+    /// One path of `planner` on pair `t` (its field made before, as in `room_nav`), `budget`
+    /// expansions per step of the shortest walk.
+    fn plan(
+        &self,
+        planner: PlannerKind,
+        t: &Timed,
+        field: Option<&dyn ContinuousField3>,
+        budget: f64,
+    ) -> bool {
+        let mut setup = PairSetup::new(
+            &self.room.scene,
+            self.region,
+            Some(self.distances),
+            &t.pair,
+            t.shortest,
+            budget,
+            5000,
+            SamplingConfig::default().seed,
+        );
+        setup.navmesh = Some(self.navmesh);
+        let path = planner
+            .plan(&setup, field, t.pair.start, t.pair.goal)
+            .expect("plan");
+        black_box(path).reached
+    }
 }
 
 fn bench_rooms(c: &mut Criterion) {
@@ -185,6 +193,12 @@ fn bench_rooms(c: &mut Criterion) {
         })
         .collect();
     let n = walks.len();
+    let walking = Shared {
+        room: &room,
+        region: &region,
+        distances: &distances,
+        navmesh: &navmesh,
+    };
     let rows = [
         ("ours", PlannerKind::Ours),
         ("ours_exact", PlannerKind::OursExact),
@@ -208,29 +222,11 @@ fn bench_rooms(c: &mut Criterion) {
                 match name {
                     "ours_exact_with_goal" => {
                         let field = ExactField3::at_cell(&region, t.goal).expect("field");
-                        plan(
-                            planner,
-                            &room,
-                            &region,
-                            &distances,
-                            &navmesh,
-                            t,
-                            Some(&field),
-                            5.0,
-                        )
+                        walking.plan(planner, t, Some(&field), 5.0)
                     }
                     "ours_raw" => {
                         let field = LearnedField3::new(&net, &region, t.goal).expect("learned");
-                        plan(
-                            planner,
-                            &room,
-                            &region,
-                            &distances,
-                            &navmesh,
-                            t,
-                            Some(&field),
-                            5.0,
-                        )
+                        walking.plan(planner, t, Some(&field), 5.0)
                     }
                     _ => {
                         let field: Option<&dyn ContinuousField3> = match planner {
@@ -238,7 +234,7 @@ fn bench_rooms(c: &mut Criterion) {
                             PlannerKind::Ours | PlannerKind::OursNoAff => Some(&tables[k]),
                             _ => None,
                         };
-                        plan(planner, &room, &region, &distances, &navmesh, t, field, 5.0)
+                        walking.plan(planner, t, field, 5.0)
                     }
                 }
             })
@@ -254,6 +250,10 @@ fn bench_rooms(c: &mut Criterion) {
     if !sits.is_empty() {
         let m = sits.len();
         let learned_ok = seats_region.frame.shape == region.frame.shape;
+        let seated = Shared {
+            region: &seats_region,
+            ..walking
+        };
         for (name, planner) in [
             ("ours_exact_with_goal", PlannerKind::OursExact),
             ("ours", PlannerKind::Ours),
@@ -281,37 +281,10 @@ fn bench_rooms(c: &mut Criterion) {
                     match planner {
                         PlannerKind::OursExact => {
                             let field = ExactField3::at_cell(&seats_region, t.goal).expect("field");
-                            plan(
-                                planner,
-                                &room,
-                                &seats_region,
-                                &distances,
-                                &navmesh,
-                                t,
-                                Some(&field),
-                                50.0,
-                            )
+                            seated.plan(planner, t, Some(&field), 50.0)
                         }
-                        PlannerKind::Ours => plan(
-                            planner,
-                            &room,
-                            &seats_region,
-                            &distances,
-                            &navmesh,
-                            t,
-                            Some(&tables[k]),
-                            50.0,
-                        ),
-                        _ => plan(
-                            planner,
-                            &room,
-                            &seats_region,
-                            &distances,
-                            &navmesh,
-                            t,
-                            None,
-                            50.0,
-                        ),
+                        PlannerKind::Ours => seated.plan(planner, t, Some(&tables[k]), 50.0),
+                        _ => seated.plan(planner, t, None, 50.0),
                     }
                 })
             });

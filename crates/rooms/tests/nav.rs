@@ -42,24 +42,28 @@ fn valid_share(scene: &Scene, path: &[[f32; 3]], step: Option<f32>) -> f64 {
     reports.iter().filter(|r| r.valid()).count() as f64 / reports.len() as f64
 }
 
-#[test]
-fn only_the_search_with_affordance_keeps_every_pose_valid() {
-    let scene = scene();
-    let gait = walk(&WalkConfig::default(), 1).unwrap();
-    let z = gait.frames[0].torso().z;
-    // The region: every torso on a 5 cm grid at walking height that the filter keeps
-    // (standing supported, torso clear), the space over the bar included.
+/// The region: every torso on a 5 cm grid at height `z` that the filter keeps (standing
+/// supported, torso clear), the space over the bar included.
+fn region_at(scene: &Scene, z: f32) -> AccessibleRegion {
     let config = RegionConfig::default();
     let mut kept = Vec::new();
     for i in 0..80 {
         for j in 0..40 {
             let p = [0.025 + 0.05 * i as f32, 0.025 + 0.05 * j as f32, z];
-            if afford(&scene, p, &config).unwrap().kept() {
+            if afford(scene, p, &config).unwrap().kept() {
                 kept.push(p);
             }
         }
     }
-    let region = AccessibleRegion::from_samples(&scene, kept, 0.1).unwrap();
+    AccessibleRegion::from_samples(scene, kept, 0.1).unwrap()
+}
+
+#[test]
+fn only_the_search_with_affordance_keeps_every_pose_valid() {
+    let scene = scene();
+    let gait = walk(&WalkConfig::default(), 1).unwrap();
+    let z = gait.frames[0].torso().z;
+    let region = region_at(&scene, z);
     // The straight line crosses the bar at y = 0.85.
     let (start, goal) = ([0.5, 0.2, z], [3.5, 1.5, z]);
     assert!(region.contains(start) && region.contains(goal));
@@ -161,17 +165,7 @@ fn ours_reads_its_field_and_distances_once_and_the_costs_are_split() {
     let scene = scene();
     let gait = walk(&WalkConfig::default(), 1).unwrap();
     let z = gait.frames[0].torso().z;
-    let config = RegionConfig::default();
-    let mut kept = Vec::new();
-    for i in 0..80 {
-        for j in 0..40 {
-            let p = [0.025 + 0.05 * i as f32, 0.025 + 0.05 * j as f32, z];
-            if afford(&scene, p, &config).unwrap().kept() {
-                kept.push(p);
-            }
-        }
-    }
-    let region = AccessibleRegion::from_samples(&scene, kept, 0.1).unwrap();
+    let region = region_at(&scene, z);
     let net = FieldNet::new(
         ModelConfig::Goal(GoalConfig {
             extent: region.frame.shape.to_vec(),
