@@ -16,7 +16,8 @@ fn check_point(what: &'static str, v: f32, extent: usize) -> Result<()> {
 
 /// Splits a coordinate in `[0, n-1]` into a lower cell index and a weight for the upper one.
 fn split(v: f32, n: usize) -> (usize, usize, f32) {
-    let i0 = (v.floor() as usize).min(n - 1);
+    // v >= 0 (checked by every caller), so the cast is the floor, without a call into libm.
+    let i0 = (v as usize).min(n - 1);
     let i1 = (i0 + 1).min(n - 1);
     (i0, i1, v - i0 as f32)
 }
@@ -218,7 +219,8 @@ impl Field3 {
     pub fn sample_finite(&self, p: Point3) -> Result<f32> {
         let corners = self.corners(p)?;
         let [nx, ny, nz] = self.shape;
-        let round = |v: f32, n: usize| (v.round() as usize).min(n - 1);
+        // Coordinates are >= 0 (checked above): half up is f32::round here, without libm.
+        let round = |v: f32, n: usize| ((v + 0.5) as usize).min(n - 1);
         let holder = self.values[(round(p.x, nx) * ny + round(p.y, ny)) * nz + round(p.z, nz)];
         if !holder.is_finite() {
             return Ok(f32::INFINITY);

@@ -127,7 +127,8 @@ impl SignedDistance for DistanceGrid {
             let q = (p[a] - self.origin[a]) / self.cell;
             let c = q.clamp(0.0, top);
             outside += ((q - c) * self.cell).powi(2);
-            let b = (c.floor() as usize).min(self.shape[a].saturating_sub(2));
+            // c >= 0, so the cast is the floor (and needs no call into libm).
+            let b = (c as usize).min(self.shape[a].saturating_sub(2));
             base[a] = b;
             frac[a] = if self.shape[a] > 1 { c - b as f32 } else { 0.0 };
         }

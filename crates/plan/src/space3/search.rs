@@ -15,8 +15,8 @@ use std::cmp::Reverse;
 use std::collections::{BinaryHeap, HashSet};
 use std::hash::{BuildHasherDefault, Hasher};
 
-/// FxHash's multiply-rotate over the opened set's keys (small integer triples, hashed once
-/// per candidate): std's SipHash guards against chosen keys, which a search never meets, at
+/// FxHash's multiply-rotate over the opened set's keys (packed lattice cells, hashed once per
+/// candidate): std's SipHash guards against chosen keys, which a search never meets, at
 /// several times the cost.
 #[derive(Default)]
 struct LatticeHasher(u64);
@@ -34,8 +34,8 @@ impl Hasher for LatticeHasher {
     fn write(&mut self, bytes: &[u8]) {
         bytes.iter().for_each(|&b| self.add(u64::from(b)));
     }
-    fn write_i64(&mut self, i: i64) {
-        self.add(i as u64);
+    fn write_u64(&mut self, i: u64) {
+        self.add(i);
     }
     fn write_usize(&mut self, i: usize) {
         self.add(i as u64);
@@ -108,7 +108,7 @@ impl FieldSearch3 {
         }
         let dirs = directions26();
         let s = self.step;
-        let key = |p: Point3m| p.map(|v| (v / (0.5 * s)).round() as i64);
+        let key = |p: Point3m| lattice_key(p, 0.5 * s);
         // Points on the open list: position, parent, depth (the index along its chain) and
         // whether the filter has passed it (the start needs no pass).
         let mut nodes: Vec<Node> = vec![Node {
@@ -117,7 +117,7 @@ impl FieldSearch3 {
             depth: 0,
             checked: true,
         }];
-        let mut opened: HashSet<[i64; 3], BuildHasherDefault<LatticeHasher>> = HashSet::default();
+        let mut opened: HashSet<u64, BuildHasherDefault<LatticeHasher>> = HashSet::default();
         let mut open = BinaryHeap::new();
         let start_value = values_or_infinity(field, &[start])[0];
         open.push(Reverse((Order(start_value), 0usize)));
@@ -322,6 +322,18 @@ impl FieldSearch3 {
         }
         Ok(Some(steps))
     }
+}
+
+/// The lattice cell of `p` at spacing `cell` (rounded to the nearest), its three indices
+/// packed in 21 bits each: cells 2^21 apart on an axis (kilometres at any step a body takes)
+/// would share a key.
+fn lattice_key(p: Point3m, cell: f32) -> u64 {
+    // Half away from zero, as f32::round, without a call into libm.
+    let index = |v: f32| {
+        let x = v / cell;
+        (x + 0.5f32.copysign(x)) as i64 as u64 & 0x1F_FFFF
+    };
+    (index(p[0]) << 42) | (index(p[1]) << 21) | index(p[2])
 }
 
 /// A point on the search's open list.
@@ -553,6 +565,23 @@ mod tests {
         for (k, w) in free.points.windows(2).enumerate() {
             assert!(Pocket.keep(k, w[0], &[w[1]]).unwrap()[0]);
         }
+    }
+
+    /// The packed key is the rounded lattice cell: equal within a cell, apart across cells,
+    /// on both sides of zero.
+    #[test]
+    fn lattice_keys_round_to_the_nearest_cell() {
+        let k = |x: f32, y: f32, z: f32| lattice_key([x, y, z], 0.02);
+        assert_eq!(k(0.0, 0.0, 0.0), k(0.009, -0.009, 0.0));
+        assert_ne!(k(0.0, 0.0, 0.0), k(0.011, 0.0, 0.0));
+        assert_ne!(k(-0.011, 0.0, 0.0), k(0.011, 0.0, 0.0));
+        assert_eq!(k(-1.0, 2.0, -3.0), k(-1.005, 2.005, -2.995));
+        let mut keys: Vec<u64> = (-30..30)
+            .flat_map(|i| (-3..3).map(move |j| k(0.02 * i as f32, 0.02 * j as f32, 1.0)))
+            .collect();
+        keys.sort_unstable();
+        keys.dedup();
+        assert_eq!(keys.len(), 60 * 6);
     }
 
     #[test]
