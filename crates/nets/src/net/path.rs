@@ -388,14 +388,26 @@ mod tests {
         }
     }
 
-    /// The op's gradient matches central finite differences of a weighted sum of the values.
+    /// The op's gradient matches central finite differences of a weighted sum of the values,
+    /// wherever the sum is differentiable: a cost whose nudge switches a shortest path (the two
+    /// one-sided differences disagree) has no derivative to match, and is left out.
     #[test]
     fn gradient_matches_finite_differences() -> Result<()> {
         let device = Device::Cpu;
         let (rows, cols) = (4, 5);
         let mp = op(rows, cols, &[6, 7, 13], 0, MoveRule::Strict);
-        let base = Tensor::rand(0.5f32, 2.0, (1, rows, cols, MOVES), &device)?;
-        let weights = Tensor::rand(0f32, 1.0, (1, rows, cols, 1), &device)?;
+        // Seeded: candle's `rand` is not, and a draw with two paths tied within the step made
+        // this test fail now and then.
+        let mut rng = envfield_grid::SplitMix64::new(7);
+        let mut draw = |n: usize, lo: f32, hi: f32| -> Vec<f32> {
+            (0..n).map(|_| lo + (hi - lo) * rng.next_f32()).collect()
+        };
+        let base = Tensor::from_vec(
+            draw(rows * cols * MOVES, 0.5, 2.0),
+            (1, rows, cols, MOVES),
+            &device,
+        )?;
+        let weights = Tensor::from_vec(draw(rows * cols, 0.0, 1.0), (1, rows, cols, 1), &device)?;
         let var = Var::from_tensor(&base)?;
         let loss = |t: &Tensor| -> Result<Tensor> {
             Ok((t.apply_op1(mp.clone())? * &weights)?.sum_all()?)
@@ -416,7 +428,11 @@ mod tests {
                 let t = Tensor::from_vec(y, (1, rows, cols, MOVES), &device)?;
                 Ok(loss(&t)?.to_scalar::<f32>()?)
             };
-            let fd = (at(eps)? - at(-eps)?) / (2.0 * eps);
+            let (up, mid, down) = (at(eps)?, at(0.0)?, at(-eps)?);
+            if ((up - mid) - (mid - down)).abs() / eps > 1e-2 {
+                continue; // a kink: the nudge switches a shortest path
+            }
+            let fd = (up - down) / (2.0 * eps);
             assert!(
                 (fd - g[i]).abs() < 2e-2,
                 "cost {i}: analytic {} numeric {fd}",
