@@ -32,6 +32,16 @@ impl Default for AffordanceConfig {
 }
 
 impl AffordanceConfig {
+    /// A support joint at signed distance `d` rests on a surface.
+    fn rests(&self, d: f32) -> bool {
+        d <= self.contact_tolerance && d >= -self.max_penetration
+    }
+
+    /// Any other joint at signed distance `d` is inside geometry.
+    fn collides(&self, d: f32) -> bool {
+        d < -self.collision_margin
+    }
+
     fn validate(&self) -> Result<()> {
         let ok = |v: f32| v.is_finite() && v >= 0.0;
         if ok(self.contact_tolerance) && ok(self.max_penetration) && ok(self.collision_margin) {
@@ -115,23 +125,18 @@ pub fn pose_valid<S: SignedDistance + ?Sized>(
     pose.validate()?;
     let support_joints = support.joints();
     for j in Joint::ALL.iter().filter(|j| !support_joints.contains(j)) {
-        if scene.distance_at(&pose.joints[j.index()])? < -config.collision_margin {
+        if config.collides(scene.distance_at(&pose.joints[j.index()])?) {
             return Ok(false);
         }
     }
-    let mut resting = 0;
+    // One resting joint decides "any suffices"; one that does not rest decides "all".
+    let any = support.any_joint_suffices();
     for j in support_joints {
-        let d = scene.distance_at(&pose.joints[j.index()])?;
-        if d <= config.contact_tolerance && d >= -config.max_penetration {
-            resting += 1;
-            if support.any_joint_suffices() {
-                return Ok(true);
-            }
-        } else if !support.any_joint_suffices() {
-            return Ok(false);
+        if config.rests(scene.distance_at(&pose.joints[j.index()])?) == any {
+            return Ok(any);
         }
     }
-    Ok(resting == support_joints.len() || (support.any_joint_suffices() && resting > 0))
+    Ok(!any)
 }
 
 fn report(
@@ -140,15 +145,14 @@ fn report(
     config: &AffordanceConfig,
 ) -> AffordanceReport {
     let support_joints = support.joints();
-    let rests = |d: f32| d <= config.contact_tolerance && d >= -config.max_penetration;
     let supported_joints = support_joints
         .iter()
-        .filter(|j| rests(distances[j.index()]))
+        .filter(|j| config.rests(distances[j.index()]))
         .count();
     let colliding_joints = Joint::ALL
         .iter()
         .filter(|j| !support_joints.contains(j))
-        .filter(|j| distances[j.index()] < -config.collision_margin)
+        .filter(|j| config.collides(distances[j.index()]))
         .count();
     let supported = if support.any_joint_suffices() {
         supported_joints > 0

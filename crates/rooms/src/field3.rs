@@ -181,24 +181,12 @@ impl<'a> LearnedField3<'a> {
             )));
         }
         let free = region.free_indices();
-        let [_, ny, nz] = self.frame.shape;
         let mut queries = Vec::with_capacity(3 * free.len());
         for &i in free {
-            queries.extend([
-                (i / (ny * nz)) as f32,
-                ((i / nz) % ny) as f32,
-                (i % nz) as f32,
-            ]);
+            let c = region.grid.cell(i);
+            queries.extend([c.x as f32, c.y as f32, c.z as f32]);
         }
-        let batch = Batch {
-            extent: self.frame.shape.to_vec(),
-            items: 1,
-            obstacles: Vec::new(),
-            goals: vec![self.goal.x as f32, self.goal.y as f32, self.goal.z as f32],
-            per_item: free.len(),
-            queries,
-        };
-        let raw = self.net.predict_encoded(&batch)?;
+        let raw = self.net.predict_encoded(&self.batch_of(queries))?;
         let encoding = self.net.config().encoding();
         let mut values = vec![f32::INFINITY; region.grid.len()];
         for (&i, &t) in free.iter().zip(&raw) {
@@ -217,14 +205,19 @@ impl<'a> LearnedField3<'a> {
             let q = to_voxel(&self.frame, p)?;
             queries.extend([q.x, q.y, q.z]);
         }
-        Ok(Batch {
+        Ok(self.batch_of(queries))
+    }
+
+    /// One network batch of the goal and `queries` (continuous voxel coordinates, x y z).
+    fn batch_of(&self, queries: Vec<f32>) -> Batch {
+        Batch {
             extent: self.frame.shape.to_vec(),
             items: 1,
             obstacles: Vec::new(),
             goals: vec![self.goal.x as f32, self.goal.y as f32, self.goal.z as f32],
-            per_item: points.len(),
+            per_item: queries.len() / 3,
             queries,
-        })
+        }
     }
 }
 

@@ -492,8 +492,9 @@ impl RoomContext<'_> {
         Ok((grid, t.elapsed().as_secs_f64()))
     }
 
-    /// The bytes ours and the navigation mesh keep for the room, by name: `region_bytes` (a byte a voxel), `distances_bytes` (the distance grid),
-    /// `field_per_goal_bytes` (one goal's field table) and `navmesh_bytes` (0 without one).
+    /// The bytes ours and the navigation mesh keep for the room, by name: `region_bytes` (a
+    /// byte a voxel), `distances_bytes` (the distance grid), `field_per_goal_bytes` (one
+    /// goal's field table, an f32 a voxel) and `navmesh_bytes` (0 without one).
     pub fn bytes(&self) -> [(&'static str, usize); 4] {
         [
             ("region_bytes", self.region.grid.len()),

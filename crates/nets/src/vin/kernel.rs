@@ -449,19 +449,6 @@ mod tests {
         (obstacles, goal, wt)
     }
 
-    /// A (9 * cin, cout) weight as candle's (cout, cin, 3, 3) kernel.
-    fn kernel_of(w: &[f32], cin: usize, cout: usize, dev: &Device) -> Tensor {
-        let mut k = vec![0f32; cout * cin * 9];
-        for t in 0..9 {
-            for ch in 0..cin {
-                for o in 0..cout {
-                    k[(o * cin + ch) * 9 + t] = w[(t * cin + ch) * cout + o];
-                }
-            }
-        }
-        Tensor::from_vec(k, (cout, cin, 3, 3), dev).unwrap()
-    }
-
     /// The same network and loss in candle's ops (NCHW convolutions, its autograd), for the
     /// gradient of every weight.
     fn candle_loss_and_grad(
@@ -494,7 +481,6 @@ mod tests {
                 .reshape((qc, 1, 3, 3))
                 .unwrap()
         };
-        let _ = kernel_of; // the layout check below uses it
         let mut x = vec![0f32; 2 * rows * cols];
         for (p, &o) in obstacles.iter().enumerate() {
             x[p] = f32::from(u8::from(o));

@@ -261,9 +261,6 @@ impl Vin {
                 name: name.clone(),
             });
         }
-        for (var, data) in net.store.vars().iter().zip(net.weights.parts()) {
-            var.set(&Tensor::from_vec(data.clone(), var.dims(), &device)?)?;
-        }
         Ok((net, state))
     }
 }

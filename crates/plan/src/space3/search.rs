@@ -71,8 +71,7 @@ impl FieldSearch3 {
     /// When the goal lies within `s` and the filter allows it, the path lands on it. The path
     /// is the chain of steps from the start to the point it ends on: the goal, or after
     /// `max_steps` expansions (or `max_checks` filter calls) the opened point nearest the goal
-    /// (then `reached` is false). A
-    /// step's filter call gets the step's index along that chain.
+    /// (then `reached` is false). A step's filter call gets the step's index along that chain.
     ///
     /// # Errors
     /// [`PlanError::Invalid`] for a step, tolerance or point that is not positive / finite;
