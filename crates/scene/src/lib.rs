@@ -10,7 +10,12 @@
 //!   [`Scene::from_mesh`]); point clouds and paths export with [`write_point_cloud`] and
 //!   [`write_polyline_obj`].
 //! - [`generate_room`]: seeded furnished rooms (beds, sofas, chairs, tables, desks, cabinets)
-//!   whose free floor stays connected.
+//!   whose free floor stays connected; [`catalogue_room`]: the same rooms furnished with real
+//!   furniture models ([`Catalogue`], Sweet Home 3D's, fetched by a script).
+//! - [`import_mesh`]: a mesh from elsewhere into metres, z up, floor at z = 0, with a report
+//!   naming the flag to set when the file looks y-up or in centimetres. A mesh's inside comes
+//!   from its shape, not its normals ([`Part::mesh`]): open shells, overlapping parts and
+//!   inverted winding are read as they are meant.
 //! - [`sample_surface`] (the point cloud a scene encoder reads), [`voxelize`] into a
 //!   [`envfield_grid::Grid3`], and [`floor_map`]: the bird's-eye map of section 4.1, a top-down
 //!   depth image whose deepest pixels (the floor) are free.
@@ -31,6 +36,7 @@
 //! # Ok::<(), envfield_scene::SceneError>(())
 //! ```
 
+mod catalogue;
 mod error;
 mod floor;
 mod grid;
@@ -40,7 +46,9 @@ mod ply;
 mod room;
 mod sample;
 mod scene;
+mod solid;
 
+pub use catalogue::{catalogue_room, Catalogue, CatalogueItem, CATALOGUE_DIR};
 pub use error::{Result, SceneError};
 pub use floor::{floor_map, FloorMap, FloorMapConfig, MapFrame};
 pub use grid::{DistanceGrid, SignedDistance};

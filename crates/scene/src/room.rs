@@ -160,6 +160,75 @@ pub struct Room {
 /// # Errors
 /// [`SceneError::InvalidInput`] for a bad config.
 pub fn generate_room(config: &RoomConfig, seed: u64) -> Result<Room> {
+    furnish(config, seed, &mut Boxes::default())
+}
+
+/// One piece a [`Pieces`] source chose: what it is and how big.
+#[derive(Clone, Debug)]
+pub(crate) struct Piece {
+    pub(crate) kind: ObjectKind,
+    pub(crate) size: [f32; 3],
+    pub(crate) seat_height: Option<f32>,
+    /// The source's own handle (a catalogue item).
+    pub(crate) item: usize,
+}
+
+/// Where a room's furniture comes from: the generator's boxes or a catalogue's models.
+pub(crate) trait Pieces {
+    /// How many pieces to try, drawn once per room (after the walls).
+    fn count(&mut self, config: &RoomConfig, rng: &mut SplitMix64) -> usize;
+    /// The `n`th piece to try.
+    fn pick(&mut self, n: usize, rng: &mut SplitMix64) -> Piece;
+    /// Its geometry, placed with its footprint centred on `center`, turned by `yaw`.
+    fn build(&self, piece: &Piece, n: usize, center: [f32; 2], yaw: f32) -> Result<SceneObject>;
+}
+
+/// Whether a piece of `kind` stands with its back to a wall, facing the room.
+pub(crate) fn against_wall(kind: ObjectKind) -> bool {
+    !matches!(kind, ObjectKind::Chair | ObjectKind::Table)
+}
+
+/// The generator's own pieces: boxes, cylinders and capsules of plausible sizes.
+#[derive(Default)]
+struct Boxes {
+    kinds: Vec<ObjectKind>,
+}
+
+impl Pieces for Boxes {
+    fn count(&mut self, config: &RoomConfig, rng: &mut SplitMix64) -> usize {
+        self.kinds = vec![
+            ObjectKind::Bed,
+            ObjectKind::Sofa,
+            ObjectKind::Chair,
+            ObjectKind::Table,
+            ObjectKind::Desk,
+            ObjectKind::Cabinet,
+        ];
+        shuffle(&mut self.kinds, rng);
+        config.furniture[0] + rng.below(config.furniture[1] - config.furniture[0] + 1)
+    }
+
+    fn pick(&mut self, n: usize, rng: &mut SplitMix64) -> Piece {
+        let kind = if n < self.kinds.len() {
+            self.kinds[n]
+        } else {
+            self.kinds[rng.below(self.kinds.len())]
+        };
+        Piece {
+            kind,
+            size: furniture_size(kind, rng),
+            seat_height: seat_height(kind),
+            item: 0,
+        }
+    }
+
+    fn build(&self, piece: &Piece, n: usize, center: [f32; 2], yaw: f32) -> Result<SceneObject> {
+        build_furniture(piece.kind, n, center, yaw, piece.size)
+    }
+}
+
+/// A room of `config`'s size and walls, furnished from `pieces`: see [`generate_room`].
+pub(crate) fn furnish(config: &RoomConfig, seed: u64, pieces: &mut dyn Pieces) -> Result<Room> {
     config.validate()?;
     let mut rng = SplitMix64::new(seed);
     let range = |rng: &mut SplitMix64, r: [f32; 2]| r[0] + (r[1] - r[0]) * rng.next_f32();
@@ -219,31 +288,14 @@ pub fn generate_room(config: &RoomConfig, seed: u64) -> Result<Room> {
         })
         .collect();
 
-    let mut kinds = vec![
-        ObjectKind::Bed,
-        ObjectKind::Sofa,
-        ObjectKind::Chair,
-        ObjectKind::Table,
-        ObjectKind::Desk,
-        ObjectKind::Cabinet,
-    ];
-    shuffle(&mut kinds, &mut rng);
-    let count = config.furniture[0] + rng.below(config.furniture[1] - config.furniture[0] + 1);
+    let count = pieces.count(config, &mut rng);
     let mut furniture = Vec::new();
     let gap = config.clearance;
     for n in 0..count {
-        let kind = if n < kinds.len() {
-            kinds[n]
-        } else {
-            kinds[rng.below(kinds.len())]
-        };
-        let size = furniture_size(kind, &mut rng);
-        let against_wall = matches!(
-            kind,
-            ObjectKind::Bed | ObjectKind::Sofa | ObjectKind::Desk | ObjectKind::Cabinet
-        );
+        let piece = pieces.pick(n, &mut rng);
+        let (kind, size) = (piece.kind, piece.size);
         for _attempt in 0..100 {
-            let (center, yaw) = if against_wall {
+            let (center, yaw) = if against_wall(kind) {
                 // The back touches the wall, the front faces the room.
                 let wall = rng.below(4);
                 let along = |rng: &mut SplitMix64, length: f32| {
@@ -281,7 +333,7 @@ pub fn generate_room(config: &RoomConfig, seed: u64) -> Result<Room> {
             if !(inside && clear) {
                 continue;
             }
-            let object = build_furniture(kind, n, center, yaw, size)?;
+            let object = pieces.build(&piece, n, center, yaw)?;
             let mut trial = scene.clone();
             let index = trial.add(object)?;
             if !floor_connected(&trial)? {
@@ -295,7 +347,7 @@ pub fn generate_room(config: &RoomConfig, seed: u64) -> Result<Room> {
                 center,
                 yaw,
                 size,
-                seat_height: seat_height(kind),
+                seat_height: piece.seat_height,
             });
             break;
         }
@@ -318,13 +370,13 @@ fn floor_connected(scene: &Scene) -> Result<bool> {
     Ok(map.grid.free_components().count() == 1)
 }
 
-fn shuffle<T>(items: &mut [T], rng: &mut SplitMix64) {
+pub(crate) fn shuffle<T>(items: &mut [T], rng: &mut SplitMix64) {
     for i in (1..items.len()).rev() {
         items.swap(i, rng.below(i + 1));
     }
 }
 
-fn at(x: f32, y: f32, z: f32, yaw: f32) -> Isometry3<f32> {
+pub(crate) fn at(x: f32, y: f32, z: f32, yaw: f32) -> Isometry3<f32> {
     Isometry3::new(Vector3::new(x, y, z), Vector3::z() * yaw)
 }
 

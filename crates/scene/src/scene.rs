@@ -2,13 +2,14 @@
 
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
-use parry3d::query::{PointQuery, PointQueryWithLocation, Ray, RayCast};
+use parry3d::query::{PointQuery, Ray, RayCast};
 use parry3d::shape::{Ball, Capsule, Cuboid, Cylinder, SharedShape, TriMesh, TriMeshFlags};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{check_point, Result, SceneError};
 use crate::mesh::TriangleMesh;
+use crate::solid::Occupancy;
 
 /// A solid primitive in its local frame: centred at the origin, axis along local z (z up).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -126,12 +127,29 @@ pub enum ObjectKind {
     Table,
     /// A desk (walk around).
     Desk,
-    /// A cabinet (walk around).
+    /// A cabinet, chest, dresser, kitchen unit or TV unit (walk around).
     Cabinet,
+    /// A bookcase or wardrobe: tall, often hollow (walk around).
+    Shelf,
+    /// A piano (walk around, sit on its stool).
+    Piano,
     /// A loaded triangle mesh (for example a scanned room).
     Mesh,
     /// Anything else.
     Other,
+}
+
+impl ObjectKind {
+    /// Whether people sit or lie on it (beds, sofas, chairs): standing on it, or sitting or
+    /// lying on any other furniture, is implausible.
+    pub fn is_seat(self) -> bool {
+        matches!(self, Self::Bed | Self::Sofa | Self::Chair)
+    }
+
+    /// Whether it is furniture (not the floor, a wall, a whole mesh or unknown).
+    pub fn is_furniture(self) -> bool {
+        !matches!(self, Self::Floor | Self::Wall | Self::Mesh | Self::Other)
+    }
 }
 
 /// One solid piece of an object, placed in the world.
@@ -142,6 +160,8 @@ pub struct Part {
     aabb: Aabb,
     /// The primitive it was made from (`None` for a mesh).
     pub primitive: Option<Primitive>,
+    /// A mesh's inside, from its shape rather than its normals (see [`Part::mesh`]).
+    occupancy: Option<std::sync::Arc<Occupancy>>,
 }
 
 impl std::fmt::Debug for Part {
@@ -170,12 +190,15 @@ impl Part {
         Ok(Self::from_shape(shape, pose, Some(primitive)))
     }
 
-    /// A closed or open triangle mesh (already in world coordinates). Its sign comes from
-    /// parry3d's pseudo-normals (`TriMeshFlags::ORIENTED`): a point is inside when it lies
-    /// behind the oriented normal of its nearest face, edge or vertex. For a closed mesh with
-    /// outward normals that is the solid's inside; for an open scan (a room is a floor and
-    /// walls, not a solid) it means "behind the surface": under the floor, inside a wall or a
-    /// piece of furniture, which is what support and collision checks need.
+    /// A triangle mesh (already in world coordinates) as it comes: closed or open, in one
+    /// piece or many, wound either way. The distance is to the nearest triangle; its sign
+    /// ignores the normals. A point is inside when air cannot reach it from outside the mesh's
+    /// box without crossing the surface (a lattice of cells of 2 cm or more; the crate's
+    /// `solid` module): the solid of a closed carcass or of overlapping boxes, a closed
+    /// cabinet's hollow. Open shells (a table top modelled as one sheet, a scan) enclose
+    /// nothing and stay thin obstacles. An enclosed cavity that spans the mesh like a room (a
+    /// room read with its ceiling) is air. Within a cell of the surface the distance is
+    /// unsigned.
     ///
     /// # Errors
     /// [`SceneError::EmptyMesh`] / [`SceneError::InvalidGeometry`] from [`TriangleMesh::validate`].
@@ -184,14 +207,12 @@ impl Part {
         let trimesh = TriMesh::with_flags(
             mesh.vertices.clone(),
             mesh.triangles.clone(),
-            TriMeshFlags::ORIENTED | TriMeshFlags::MERGE_DUPLICATE_VERTICES,
+            TriMeshFlags::MERGE_DUPLICATE_VERTICES,
         )
         .map_err(|e| SceneError::InvalidGeometry(format!("mesh: {e}")))?;
-        Ok(Self::from_shape(
-            SharedShape::new(trimesh),
-            Isometry3::identity(),
-            None,
-        ))
+        let mut part = Self::from_shape(SharedShape::new(trimesh), Isometry3::identity(), None);
+        part.occupancy = Some(std::sync::Arc::new(Occupancy::of(mesh)));
+        Ok(part)
     }
 
     fn from_shape(shape: SharedShape, pose: Isometry3<f32>, primitive: Option<Primitive>) -> Self {
@@ -201,7 +222,15 @@ impl Part {
             pose,
             aabb,
             primitive,
+            occupancy: None,
         }
+    }
+
+    /// For a mesh: the share of its box's cells that are inside, the cell side, and how many
+    /// enclosed cavities were taken as rooms (see [`Part::mesh`]). `None` for a primitive.
+    pub fn mesh_solidity(&self) -> Option<(f32, f32, usize)> {
+        let o = self.occupancy.as_ref()?;
+        Some((o.inside_share(), o.cell(), o.rooms))
     }
 
     /// Its world-space bounding box.
@@ -222,16 +251,13 @@ impl Part {
     /// Signed distance from `p` to this part (negative inside), and the projection.
     #[inline]
     fn signed_distance(&self, p: &Point3<f32>) -> (f32, Point3<f32>) {
-        let proj = match (self.primitive, self.shape.as_trimesh()) {
-            // Only the location-aware projection applies the pseudo-normals' sign.
-            (None, Some(mesh)) => {
-                let local = self.pose.inverse_transform_point(p);
-                let (mut proj, _) = mesh.project_local_point_and_get_location(&local, false);
-                proj.point = self.pose * proj.point;
-                proj
-            }
-            _ => self.shape.project_point(&self.pose, p, false),
-        };
+        if let Some(occupancy) = &self.occupancy {
+            let proj = self.shape.project_point(&self.pose, p, false);
+            let d = nalgebra::distance(p, &proj.point);
+            let local = self.pose.inverse_transform_point(p);
+            return (if occupancy.inside(&local) { -d } else { d }, proj.point);
+        }
+        let proj = self.shape.project_point(&self.pose, p, false);
         let d = nalgebra::distance(p, &proj.point);
         (if proj.is_inside { -d } else { d }, proj.point)
     }

@@ -282,17 +282,27 @@ fn a_cube_mesh_round_trips_and_has_the_box_distance() {
     assert!(TriangleMesh::read(dir.join("cube.stl")).is_err());
     std::fs::remove_dir_all(&dir).unwrap();
 
-    // The closed cube's pseudo-normal sign gives the box's signed distance.
-    let mesh_scene = Scene::from_mesh("cube", &cube).unwrap();
-    let mut rng = SplitMix64::new(4);
-    for _ in 0..2000 {
-        let p = random_point(&mut rng, 1.0);
-        let expected = box_sdf(p.coords, Vector3::repeat(0.5));
-        assert_relative_eq!(
-            mesh_scene.signed_distance(&p).unwrap(),
-            expected,
-            epsilon = 1e-5
-        );
+    // The closed cube, wound either way, gives the box's signed distance: the sign comes from
+    // its shape, and within a cell (2 cm) of the surface the distance is unsigned.
+    let mut inverted = cube.clone();
+    for t in &mut inverted.triangles {
+        t.swap(1, 2);
+    }
+    for mesh in [&cube, &inverted] {
+        let mesh_scene = Scene::from_mesh("cube", mesh).unwrap();
+        let (share, cell, rooms) = mesh_scene.objects()[0].parts()[0].mesh_solidity().unwrap();
+        assert!(share > 0.5 && cell == 0.02 && rooms == 0, "{share} {cell} {rooms}");
+        let mut rng = SplitMix64::new(4);
+        for _ in 0..2000 {
+            let p = random_point(&mut rng, 1.0);
+            let expected = box_sdf(p.coords, Vector3::repeat(0.5));
+            let got = mesh_scene.signed_distance(&p).unwrap();
+            if expected.abs() > 2.0 * cell {
+                assert_relative_eq!(got, expected, epsilon = 1e-5);
+            } else {
+                assert_relative_eq!(got.abs(), expected.abs(), epsilon = 1e-5);
+            }
+        }
     }
 }
 
@@ -412,7 +422,7 @@ fn voxels_cover_a_box_by_its_volume() {
 }
 
 #[test]
-fn an_open_scan_reads_negative_behind_its_oriented_surface() {
+fn an_open_scan_is_a_thin_obstacle_whatever_its_normals() {
     // A floor quad (normal up) and a wall quad at x = 2 facing -x: an open "scan".
     let mesh = TriangleMesh {
         vertices: vec![
@@ -428,9 +438,11 @@ fn an_open_scan_reads_negative_behind_its_oriented_surface() {
     let scene = Scene::from_mesh("scan", &mesh).unwrap();
     let d = |x, y, z| scene.signed_distance(&Point3::new(x, y, z)).unwrap();
     assert_relative_eq!(d(1.0, 1.0, 0.3), 0.3, epsilon = 1e-6);
-    assert_relative_eq!(d(1.0, 1.0, -0.2), -0.2, epsilon = 1e-6);
+    // Open sheets enclose nothing: behind them the distance is positive, whichever way they
+    // face, so a scan wound inside out reads the same.
+    assert_relative_eq!(d(1.0, 1.0, -0.2), 0.2, epsilon = 1e-6);
     assert_relative_eq!(d(1.5, 1.0, 1.0), 0.5, epsilon = 1e-6);
-    assert_relative_eq!(d(2.25, 1.0, 1.0), -0.25, epsilon = 1e-6);
+    assert_relative_eq!(d(2.25, 1.0, 1.0), 0.25, epsilon = 1e-6);
     let s = scene.closest(&Point3::new(1.0, 1.0, 0.3)).unwrap().unwrap();
     assert_relative_eq!(s.normal, Vector3::z(), epsilon = 1e-5);
     // The floor map of the scan: the floor is free, the wall's top edge is not seen as floor.
