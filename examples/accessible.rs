@@ -24,7 +24,8 @@ use envfield::rooms::{
     RegionConfig, RegionQuality,
 };
 use envfield::scene::{
-    generate_room, read_scene, ImportConfig, Room, RoomConfig, Scene, Units, UpAxis,
+    catalogue_room, generate_room, read_scene, Catalogue, ImportConfig, Room, RoomConfig, Scene,
+    Units, UpAxis,
 };
 use envfield::vae::{Cvae, Gate, SampleOptions};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -62,6 +63,10 @@ struct Args {
     /// Evaluate this many held-out generated rooms instead of drawing one.
     #[arg(long)]
     rooms: Option<u64>,
+    /// Furnish the rooms with Sweet Home 3D's furniture models (fetched by
+    /// scripts/fetch_sweethome3d.sh) instead of the generator's boxes.
+    #[arg(long)]
+    catalogue: bool,
     /// Train and measure the learned field on the first this many rooms of --rooms.
     #[arg(long, default_value_t = 5)]
     field_rooms: u64,
@@ -77,6 +82,13 @@ struct Args {
     /// Radius of the torso sphere the filter keeps clear of geometry, metres.
     #[arg(long)]
     torso_radius: Option<f32>,
+    /// Turn the filter's plausibility rule off (bones through tables, legs hanging off
+    /// table tops pass; no settling): the ablation.
+    #[arg(long)]
+    no_plausible: bool,
+    /// How far a sample may settle to sit, metres (default: `RegionConfig`'s 0.2).
+    #[arg(long)]
+    settle: Option<f32>,
     /// Skip the learned field.
     #[arg(long)]
     no_field: bool,
@@ -98,10 +110,54 @@ struct Args {
     json: bool,
 }
 
+/// The rooms of seed `seed`: the generator's, or furnished from the catalogue.
+struct Rooms(Option<Catalogue>);
+
+impl Rooms {
+    fn new(args: &Args) -> Result<Self> {
+        if !args.catalogue {
+            return Ok(Self(None));
+        }
+        let dir = Catalogue::find()
+            .context("no Sweet Home 3D catalogue: run scripts/fetch_sweethome3d.sh")?;
+        Ok(Self(Some(Catalogue::read(&dir).with_context(|| {
+            format!("reading the catalogue at {}", dir.display())
+        })?)))
+    }
+
+    fn room(&self, seed: u64) -> Result<Room> {
+        Ok(match &self.0 {
+            Some(c) => catalogue_room(c, &catalogue_config(), seed)?,
+            None => generate_room(&RoomConfig::default(), seed)?,
+        })
+    }
+
+    fn name(&self) -> &'static str {
+        if self.0.is_some() {
+            "real-furniture room"
+        } else {
+            "generated room"
+        }
+    }
+}
+
 fn region_config(args: &Args) -> RegionConfig {
     let mut config = RegionConfig::default();
     config.torso_radius = args.torso_radius.unwrap_or(config.torso_radius);
+    config.settle = args.settle.unwrap_or(config.settle);
+    if args.no_plausible {
+        (config.plausible, config.settle) = (false, 0.0);
+    }
     config
+}
+
+/// Real-furniture rooms: the generator's walls and doors, more pieces (the catalogue has
+/// eight kinds).
+fn catalogue_config() -> RoomConfig {
+    RoomConfig {
+        furniture: [6, 9],
+        ..RoomConfig::default()
+    }
 }
 
 /// The learned field's training config: `Field3Config`'s defaults under the `--field-*` flags.
@@ -153,7 +209,7 @@ fn one(args: &Args, vae: &Cvae) -> Result<()> {
             (scene, None)
         }
         None => {
-            let room = generate_room(&RoomConfig::default(), args.seed)?;
+            let room = Rooms::new(args)?.room(args.seed)?;
             (room.scene.clone(), Some(room))
         }
     };
@@ -189,7 +245,7 @@ fn one(args: &Args, vae: &Cvae) -> Result<()> {
     let summary = serde_json::json!({
         "affords_clear_supported_valid": drawn["affords_clear_supported_valid"],
         "drawn_by_height_m": drawn["drawn_by_height_m"],
-        "scene": args.scene.as_ref().map(|p| p.display().to_string()).unwrap_or(format!("generated room {}", args.seed)),
+        "scene": args.scene.as_ref().map(|p| p.display().to_string()).unwrap_or(format!("{} {}", Rooms::new(args)?.name(), args.seed)),
         "samples": samples.len(),
         "kept": region.samples.len(),
         "accessible_voxels": region.grid.free_count(),
@@ -218,9 +274,10 @@ fn many(args: &Args, vae: &Cvae, rooms: u64) -> Result<()> {
     let (mut ours, mut random, mut uniform) = (Vec::new(), Vec::new(), Vec::new());
     let mut fields = Vec::new();
     let bar = progress(rooms, "held-out rooms")?;
+    let makes = Rooms::new(args)?;
     for k in 0..rooms {
         let seed = 10_000 + k;
-        let room = generate_room(&RoomConfig::default(), seed)?;
+        let room = makes.room(seed)?;
         let samples = draw(args, vae, anchors.as_ref(), &room.scene, seed, false)?;
         ours.push(region_quality(&room, &samples, &config)?);
         random.push(region_quality(
@@ -248,6 +305,7 @@ fn many(args: &Args, vae: &Cvae, rooms: u64) -> Result<()> {
         .collect();
     let mut line = serde_json::json!({
         "rooms": rooms,
+        "furniture": makes.name(),
         "samples_per_room": args.samples,
         "untrained_vae": RegionQuality::mean_json(&random),
         "uniform_box": RegionQuality::mean_json(&uniform),

@@ -139,6 +139,59 @@ pub fn pose_valid<S: SignedDistance + ?Sized>(
     Ok(!any)
 }
 
+/// Whether every bone of `pose` (the segment from each joint to its parent) keeps its
+/// distance from geometry along its whole length, not only at its joints: a thigh can pass
+/// through a table top between a hip above it and a knee below it while every joint is clear.
+/// A bone ending at one of `support`'s joints may sink as deep as a support joint may
+/// (`max_penetration`); any other keeps at least `clearance` from every surface, a limb's
+/// thickness around its bone, so a zero-thickness sheet (which has no inside) is caught too.
+/// Each bone is walked from one end by its distance to the nearest surface (at least
+/// `min_step`), so free space costs a few reads.
+///
+/// # Errors
+/// As [`check_pose`]; [`AffordanceError::InvalidInput`] for a `min_step` that is not positive
+/// or a `clearance` that is negative or not finite.
+pub fn bones_clear<S: SignedDistance + ?Sized>(
+    scene: &S,
+    pose: &Pose,
+    support: Support,
+    config: &AffordanceConfig,
+    clearance: f32,
+    min_step: f32,
+) -> Result<bool> {
+    config.validate()?;
+    pose.validate()?;
+    if !(min_step.is_finite() && min_step > 0.0 && clearance.is_finite() && clearance >= 0.0) {
+        return Err(AffordanceError::InvalidInput(format!(
+            "bones_clear: a positive min_step and a clearance >= 0, got {min_step} and \
+             {clearance}"
+        )));
+    }
+    let support_joints = support.joints();
+    for joint in Joint::ALL {
+        let Some(parent) = joint.parent() else {
+            continue;
+        };
+        let a = pose.joints[parent.index()];
+        let b = pose.joints[joint.index()];
+        let floor = if support_joints.contains(&joint) || support_joints.contains(&parent) {
+            -config.max_penetration
+        } else {
+            clearance
+        };
+        let length = (b - a).norm();
+        let mut t = 0.0;
+        while t <= length {
+            let d = scene.distance_at(&(a + (b - a) * (t / length.max(1e-9))))?;
+            if d < floor {
+                return Ok(false);
+            }
+            t += (d - floor).max(min_step);
+        }
+    }
+    Ok(true)
+}
+
 fn report(
     distances: [f32; JOINT_COUNT],
     support: Support,

@@ -33,7 +33,9 @@ mod motion;
 mod skeleton;
 
 pub use align::{align_in_scene, align_to_trajectory, resample_path, walk_along, AlignConfig};
-pub use check::{check_pose, check_sequence, pose_valid, AffordanceConfig, AffordanceReport};
+pub use check::{
+    bones_clear, check_pose, check_sequence, pose_valid, AffordanceConfig, AffordanceReport,
+};
 pub use error::{AffordanceError, Result};
 pub use motion::{
     get_up, lie_down, sit_down, standing_pose, walk, LieConfig, SitConfig, WalkConfig,

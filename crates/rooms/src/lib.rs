@@ -60,8 +60,8 @@ pub use field3::{ExactField3, LearnedField3, VoxelField3};
 pub use field3_train::{train_field3, Field3Config, Field3Report};
 pub use nav::{offset, point, PoseFilter};
 pub use region::{
-    afford, afford_all, covered_pct, drawn_summary, region_quality, uniform_in_room,
-    AccessibleRegion, Afford, RegionConfig, RegionQuality,
+    afford, afford_all, covered_pct, drawn_summary, implausible, plausible, region_quality,
+    uniform_in_room, AccessibleRegion, Afford, RegionConfig, RegionQuality,
 };
 pub use torsos::{
     lie_on, pose_kind, room_torsos, rooms_torsos, seat_grid, seat_torsos, sit_on, standing_floor,

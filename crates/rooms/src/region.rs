@@ -7,7 +7,17 @@
 //! 1. a sphere of [`RegionConfig::torso_radius`] around it is clear of geometry (its signed
 //!    distance is at least the radius), and
 //! 2. some pose is *supported* with its torso there: the standing pose (feet on a surface), the
-//!    seated pose or the lying pose, each tried at [`RegionConfig::yaws`] headings.
+//!    seated pose (on a seat of 0.45 m or a low one of 0.32 m) or the lying pose, each tried at
+//!    [`RegionConfig::yaws`] headings, and
+//! 3. that pose is [`plausible`] ([`RegionConfig::plausible`], on by default): no bone passes
+//!    through geometry or grazes it, and a seated body's feet reach a surface. Without rule 3,
+//!    a body standing with a table top between its knees and hips, or sitting on a table top
+//!    with its legs hanging, passes: every joint is clear. On rooms with known furniture
+//!    [`implausible`] measures what slips through.
+//!
+//! A sample that fails is tried again lower down ([`RegionConfig::settle`]) and kept there if
+//! it sits: the VAE places a seated torso at the height it learned above a seat, and a sofa's
+//! cushion may be lower.
 //!
 //! Whether a kept sample *affords* a pose, i.e. some pose there is supported and free of
 //! collisions (the check of `envfield_affordance::check_pose`), is the quality figure: the
@@ -16,12 +26,12 @@
 use crate::torsos::seat_torsos;
 use crate::{Result, RoomsError};
 use envfield_affordance::{
-    check_pose, lie_down, sit_down, standing_pose, AffordanceConfig, LieConfig, Pose, SitConfig,
-    Support,
+    bones_clear, check_pose, lie_down, sit_down, standing_pose, AffordanceConfig, Joint, LieConfig,
+    Pose, SitConfig, Support,
 };
 use envfield_grid::{Cell3, Field2, Grid3, HeatMapStyle};
 use envfield_scene::nalgebra::{Point3, Vector3};
-use envfield_scene::{Room, Scene, VoxelFrame};
+use envfield_scene::{ObjectKind, Room, Scene, SignedDistance, VoxelFrame};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -38,6 +48,14 @@ pub struct RegionConfig {
     pub voxel: f32,
     /// The support and collision tolerances.
     pub affordance: AffordanceConfig,
+    /// Keep only [`plausible`] poses (the module's filter, rule 3).
+    #[serde(default)]
+    pub plausible: bool,
+    /// A sample no pose rests at is tried again up to this much lower (metres, in 5 cm
+    /// steps), and kept where a pose first rests if that pose sits: a torso drawn a little
+    /// above a seat settles onto it. 0 judges each sample where it was drawn.
+    #[serde(default)]
+    pub settle: f32,
 }
 
 impl Default for RegionConfig {
@@ -47,6 +65,8 @@ impl Default for RegionConfig {
             yaws: 8,
             voxel: 0.1,
             affordance: AffordanceConfig::default(),
+            plausible: true,
+            settle: 0.2,
         }
     }
 }
@@ -57,12 +77,15 @@ impl RegionConfig {
             && self.torso_radius >= 0.0
             && (1..=360).contains(&self.yaws)
             && self.voxel.is_finite()
-            && self.voxel >= 0.02;
+            && self.voxel >= 0.02
+            && self.settle.is_finite()
+            && (0.0..=2.0).contains(&self.settle);
         if ok {
             Ok(())
         } else {
             Err(RoomsError::InvalidConfig(format!(
-                "region: torso_radius >= 0, 1 to 360 yaws and a voxel of at least 2 cm (got {self:?})"
+                "region: torso_radius >= 0, 1 to 360 yaws, a voxel of at least 2 cm and a settle of \
+                 0 to 2 m (got {self:?})"
             )))
         }
     }
@@ -73,6 +96,8 @@ impl RegionConfig {
 struct Kit {
     standing: Pose,
     sitting: Pose,
+    /// Seated on a low seat (0.32 m: armchairs, low sofas), the knees bent further.
+    sitting_low: Pose,
     lying: Pose,
 }
 
@@ -83,17 +108,22 @@ impl Kit {
             p.translated(&Vector3::new(-t.x, -t.y, -t.z))
         };
         let sit = sit_down(&SitConfig::default())?;
+        let low = sit_down(&SitConfig {
+            seat_height: 0.32,
+            ..SitConfig::default()
+        })?;
         let lie = lie_down(&LieConfig::default())?;
         Ok(Self {
             standing: centre(standing_pose()),
             sitting: centre(*sit.frames.last().expect("frames")),
+            sitting_low: centre(*low.frames.last().expect("frames")),
             lying: centre(*lie.frames.last().expect("frames")),
         })
     }
 }
 
 /// What a torso location affords.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Afford {
     /// The torso sphere is clear of geometry.
     pub clear: bool,
@@ -101,6 +131,8 @@ pub struct Afford {
     pub supported: Option<Support>,
     /// The first pose found supported and collision-free there.
     pub valid: Option<Support>,
+    /// Where it was judged: the sample, or where it settled ([`RegionConfig::settle`]).
+    pub at: [f32; 3],
 }
 
 impl Afford {
@@ -125,17 +157,43 @@ fn afford_with(scene: &Scene, p: [f32; 3], config: &RegionConfig, kit: &Kit) -> 
             "torso location {p:?} is not finite"
         )));
     }
+    let first = afford_at(scene, p, config, kit)?;
+    if first.kept() {
+        return Ok(first);
+    }
+    // Settling: the same torso lower down, a step at a time, until it sits.
+    let steps = (config.settle / SETTLE_STEP).round() as usize;
+    for k in 1..=steps {
+        let lower = [p[0], p[1], p[2] - k as f32 * SETTLE_STEP];
+        let a = afford_at(scene, lower, config, kit)?;
+        if a.kept() {
+            return Ok(if a.supported == Some(Support::Sitting) {
+                a
+            } else {
+                first
+            });
+        }
+    }
+    Ok(first)
+}
+
+/// The settling step, metres.
+const SETTLE_STEP: f32 = 0.05;
+
+fn afford_at(scene: &Scene, p: [f32; 3], config: &RegionConfig, kit: &Kit) -> Result<Afford> {
     let at = Point3::from(p);
     let clear = scene.signed_distance(&at)? >= config.torso_radius;
     let mut out = Afford {
         clear,
         supported: None,
         valid: None,
+        at: p,
     };
     let to = at.coords;
     let tries = [
         (kit.standing, Support::Standing),
         (kit.sitting, Support::Sitting),
+        (kit.sitting_low, Support::Sitting),
         (kit.lying, Support::Lying),
     ]
     .into_iter()
@@ -151,7 +209,12 @@ fn afford_with(scene: &Scene, p: [f32; 3], config: &RegionConfig, kit: &Kit) -> 
     for (pose, support, yaw) in tries {
         let placed = pose.rotated_about_z(yaw, &Point3::origin()).translated(&to);
         let r = check_pose(scene, &placed, support, &config.affordance)?;
-        if r.supported && out.supported.is_none() {
+        if !r.supported
+            || (config.plausible && !plausible(scene, &placed, support, &config.affordance)?)
+        {
+            continue;
+        }
+        if out.supported.is_none() {
             out.supported = Some(support);
         }
         if r.valid() {
@@ -160,6 +223,51 @@ fn afford_with(scene: &Scene, p: [f32; 3], config: &RegionConfig, kit: &Kit) -> 
         }
     }
     Ok(out)
+}
+
+/// Sampling step along a bone, metres.
+const BONE_STEP: f32 = 0.02;
+/// What a limb keeps between its bone and any surface it does not rest on, metres.
+const LIMB: f32 = 0.03;
+/// How far above a surface a seated body's feet may hang, metres: the knees flex that much
+/// (a seat of 0.3-0.6 m); a table top (0.74 m) leaves them hanging higher.
+const FEET_REACH: f32 = 0.2;
+
+/// Whether a supported `pose` is a plausible one: no bone passes through geometry or grazes
+/// it (a limb's thickness, 3 cm, around each bone that does not rest on anything), and a
+/// seated body's feet reach a surface too, within 0.2 m (a seat low enough to sit on, not a
+/// table top with the legs hanging). Rule 3 of the module's filter, and what
+/// [`standing_floor`](crate::standing_floor) asks of the floor it counts.
+///
+/// # Errors
+/// As [`check_pose`].
+pub fn plausible<S: SignedDistance + ?Sized>(
+    scene: &S,
+    pose: &Pose,
+    support: Support,
+    affordance: &AffordanceConfig,
+) -> Result<bool> {
+    if support == Support::Sitting {
+        // A foot reaches down to a surface when some point of the 0.2 m beneath it is on or
+        // in one (the table's own legs beside a hanging foot do not count).
+        for foot in [Joint::LeftFoot, Joint::RightFoot] {
+            let f = pose.joints[foot.index()];
+            let mut reaches = false;
+            for k in 0..=4 {
+                let below = Point3::new(f.x, f.y, f.z - FEET_REACH * k as f32 / 4.0);
+                if scene.distance_at(&below)? <= 0.01 {
+                    reaches = true;
+                    break;
+                }
+            }
+            if !reaches {
+                return Ok(false);
+            }
+        }
+    }
+    Ok(bones_clear(
+        scene, pose, support, affordance, LIMB, BONE_STEP,
+    )?)
 }
 
 /// What each of `samples` affords, in parallel.
@@ -250,14 +358,35 @@ impl AccessibleRegion {
     /// # Errors
     /// As [`afford_all`] and [`AccessibleRegion::from_samples`].
     pub fn from_drawn(scene: &Scene, samples: &[[f32; 3]], config: &RegionConfig) -> Result<Self> {
-        let affords = afford_all(scene, samples, config)?;
-        let kept = samples
+        let kept = afford_all(scene, samples, config)?
             .iter()
-            .zip(&affords)
-            .filter(|(_, a)| a.kept())
-            .map(|(s, _)| *s)
+            .filter(|a| a.kept())
+            .map(|a| a.at)
             .collect();
-        Self::from_samples(scene, kept, config.voxel)
+        Self::from_kept(scene, kept, config)
+    }
+
+    /// The region of `kept` samples (already filtered by `config`'s filter): as
+    /// [`AccessibleRegion::from_samples`], except that with [`RegionConfig::plausible`] a
+    /// neighbouring voxel joins only if a torso at its centre passes the filter too, so the
+    /// gaps between samples close without the region spilling over a table's edge.
+    ///
+    /// # Errors
+    /// As [`afford_all`] and [`AccessibleRegion::from_samples`].
+    pub fn from_kept(scene: &Scene, kept: Vec<[f32; 3]>, config: &RegionConfig) -> Result<Self> {
+        if !config.plausible {
+            return Self::from_samples(scene, kept, config.voxel);
+        }
+        let in_place = RegionConfig {
+            settle: 0.0,
+            ..*config
+        };
+        Self::build(scene, kept, config.voxel, |centres| {
+            Ok(afford_all(scene, centres, &in_place)?
+                .iter()
+                .map(Afford::kept)
+                .collect())
+        })
     }
 
     /// The region of `kept` samples (already filtered) on a lattice covering `scene`.
@@ -266,6 +395,17 @@ impl AccessibleRegion {
     /// [`RoomsError::InvalidInput`] for no samples (a scene with no floor keeps none) or an
     /// empty scene.
     pub fn from_samples(scene: &Scene, kept: Vec<[f32; 3]>, voxel: f32) -> Result<Self> {
+        Self::build(scene, kept, voxel, |centres| Ok(vec![true; centres.len()]))
+    }
+
+    /// The region of `kept`, each neighbour voxel of a sample's voxel joining when `joins`
+    /// says so of its centre (asked once, for all of them).
+    fn build(
+        scene: &Scene,
+        kept: Vec<[f32; 3]>,
+        voxel: f32,
+        joins: impl FnOnce(&[[f32; 3]]) -> Result<Vec<bool>>,
+    ) -> Result<Self> {
         if kept.is_empty() {
             return Err(RoomsError::InvalidInput(
                 "no torso sample affords a pose here: the scene has no floor or seat the \
@@ -292,6 +432,12 @@ impl AccessibleRegion {
         for p in &kept {
             if let Some(c) = frame.cell_of(&Point3::from(*p)) {
                 on[index(c)] = true;
+            }
+        }
+        // The six neighbours of every sample's voxel that hold no sample, asked once.
+        let mut near = vec![false; nx * ny * nz];
+        for p in &kept {
+            if let Some(c) = frame.cell_of(&Point3::from(*p)) {
                 for (dx, dy, dz) in [
                     (1, 0, 0),
                     (-1, 0, 0),
@@ -308,10 +454,22 @@ impl AccessibleRegion {
                         && (y as usize) < ny
                         && (z as usize) < nz
                     {
-                        on[index(Cell3::new(x as usize, y as usize, z as usize))] = true;
+                        let i = index(Cell3::new(x as usize, y as usize, z as usize));
+                        near[i] = !on[i];
                     }
                 }
             }
+        }
+        let candidates: Vec<usize> = (0..near.len()).filter(|&i| near[i]).collect();
+        let centres: Vec<[f32; 3]> = candidates
+            .iter()
+            .map(|&i| {
+                let c = Cell3::new(i / (ny * nz), (i / nz) % ny, i % nz);
+                frame.center(c).into()
+            })
+            .collect();
+        for (i, join) in candidates.into_iter().zip(joins(&centres)?) {
+            on[i] = join;
         }
         // The largest 26-connected set.
         let all = Grid3::from_obstacles(frame.shape, on.iter().map(|&o| !o).collect())?;
@@ -473,6 +631,13 @@ pub struct RegionQuality {
     pub seat_coverage_pct: f64,
     /// Seats in the room.
     pub seats: usize,
+    /// Kept samples that [`implausible`] finds on or inside furniture people do not use that
+    /// way, percent of those kept.
+    pub implausible_pct: f64,
+    /// The accessible region's voxels whose centre [`implausible`] finds so, percent.
+    pub region_implausible_pct: f64,
+    /// The accessible region's voxels.
+    pub region_voxels: usize,
 }
 
 impl RegionQuality {
@@ -486,6 +651,8 @@ impl RegionQuality {
             "affordable_pct": m(|x| x.affordable_pct),
             "floor_coverage_pct": m(|x| x.floor_coverage_pct),
             "seat_coverage_pct": m(|x| x.seat_coverage_pct),
+            "implausible_pct": m(|x| x.implausible_pct),
+            "region_implausible_pct": m(|x| x.region_implausible_pct),
         })
     }
 }
@@ -499,6 +666,9 @@ impl RegionQuality {
         let mut out = Self::mean_json(qualities);
         out["min_floor_coverage_pct"] = least(|q| q.floor_coverage_pct).into();
         out["min_seat_coverage_pct"] = least(|q| q.seat_coverage_pct).into();
+        let most = |f: fn(&RegionQuality) -> f64| qualities.iter().map(f).fold(0.0f64, f64::max);
+        out["max_implausible_pct"] = most(|q| q.implausible_pct).into();
+        out["max_region_implausible_pct"] = most(|q| q.region_implausible_pct).into();
         out
     }
 }
@@ -541,12 +711,7 @@ pub fn region_quality(
     config: &RegionConfig,
 ) -> Result<RegionQuality> {
     let affords = afford_all(&room.scene, samples, config)?;
-    let kept: Vec<[f32; 3]> = samples
-        .iter()
-        .zip(&affords)
-        .filter(|(_, a)| a.kept())
-        .map(|(s, _)| *s)
-        .collect();
+    let kept: Vec<[f32; 3]> = affords.iter().filter(|a| a.kept()).map(|a| a.at).collect();
     let affordable = affords
         .iter()
         .filter(|a| a.kept() && a.valid.is_some())
@@ -558,7 +723,24 @@ pub fn region_quality(
         ));
     }
     let seats = seat_torsos(room)?;
+    let implausible_share = |points: &[[f32; 3]]| -> Result<f64> {
+        let bad = points
+            .par_iter()
+            .map(|&p| implausible(room, p).map(|k| k.is_some()))
+            .collect::<Result<Vec<bool>>>()?;
+        Ok(100.0 * bad.iter().filter(|&&b| b).count() as f64 / points.len().max(1) as f64)
+    };
+    let (region_voxels, region_implausible_pct) = if kept.is_empty() {
+        (0, 0.0)
+    } else {
+        let region = AccessibleRegion::from_kept(&room.scene, kept.clone(), config)?;
+        let centres = region.voxel_centres();
+        (centres.len(), implausible_share(&centres)?)
+    };
     Ok(RegionQuality {
+        implausible_pct: implausible_share(&kept)?,
+        region_implausible_pct,
+        region_voxels,
         drawn: samples.len(),
         kept_pct: 100.0 * kept.len() as f64 / samples.len().max(1) as f64,
         affordable_pct: if kept.is_empty() {
@@ -570,6 +752,53 @@ pub fn region_quality(
         seat_coverage_pct: covered_pct(&seats, &kept, 0.15),
         seats: seats.len(),
     })
+}
+
+/// A torso this far above a seat's surface stands on it.
+const STANDING_ABOVE: f32 = 0.6;
+
+/// What is implausible about a torso at `p` in `room`, judged by the room's known furniture
+/// ([`Room::furniture`]): the kind of the piece it is inside (any furniture but a seat, whose
+/// box holds the torso of whoever sits there), or of the first surface straight below it when
+/// that is furniture people do not sit or lie on (a table, desk, cabinet, shelf or piano), or
+/// a seat it stands on (more than 0.6 m above the surface). `None` when it is plausible: over
+/// the floor, or sitting or lying on a bed, sofa or chair.
+///
+/// The affordance figures cannot see this: a body lying on a table is supported and free of
+/// collisions.
+///
+/// # Errors
+/// [`RoomsError::InvalidInput`] for a point that is not finite.
+pub fn implausible(room: &Room, p: [f32; 3]) -> Result<Option<ObjectKind>> {
+    if !p.iter().all(|v| v.is_finite()) {
+        return Err(RoomsError::InvalidInput(format!(
+            "torso location {p:?} is not finite"
+        )));
+    }
+    for f in &room.furniture {
+        if f.kind.is_seat() {
+            continue;
+        }
+        // Into the piece's own frame: its footprint centred, width along x, depth along y.
+        let (s, c) = f.yaw.sin_cos();
+        let (dx, dy) = (p[0] - f.center[0], p[1] - f.center[1]);
+        let (lx, ly) = (c * dx + s * dy, -s * dx + c * dy);
+        if lx.abs() < f.size[0] / 2.0
+            && ly.abs() < f.size[1] / 2.0
+            && p[2] >= 0.0
+            && p[2] < f.size[2]
+        {
+            return Ok(Some(f.kind));
+        }
+    }
+    let below = room
+        .scene
+        .cast_ray(&Point3::from(p), &-Vector3::z(), p[2].max(0.0) + 1.0)?;
+    Ok(below.and_then(|hit| {
+        let kind = room.scene.objects()[hit.object].kind;
+        let wrong = kind.is_furniture() && (!kind.is_seat() || hit.distance > STANDING_ABOVE);
+        wrong.then_some(kind)
+    }))
 }
 
 /// Uniform samples in the room's box (interior, floor to wall top): the no-learning control.

@@ -145,9 +145,20 @@ fn standing_at(x: f32, y: f32) -> Pose {
     p.translated(&Vector3::new(x - t.x, y - t.y, 0.0))
 }
 
+/// The region's filter, each torso judged where it is (no settling): training data keeps
+/// the torsos it judged.
+fn judged_in_place() -> crate::RegionConfig {
+    crate::RegionConfig {
+        settle: 0.0,
+        ..crate::RegionConfig::default()
+    }
+}
+
 /// The torso locations of every standing pose on a floor grid of `spacing` metres over
-/// `bounds` (`[x_min, y_min, x_max, y_max]`, the floor at z = 0) that is supported and
-/// collision-free: the standing-affordable floor.
+/// `bounds` (`[x_min, y_min, x_max, y_max]`, the floor at z = 0) that is supported,
+/// collision-free and [`plausible`](crate::plausible) (no bone through geometry: the floor
+/// under a table, where the top would pass between the knees and the hips, is not standing
+/// floor): the standing-affordable floor.
 ///
 /// # Errors
 /// [`RoomsError::InvalidConfig`] for a spacing under 1 cm or bounds that are not finite or hold
@@ -180,7 +191,14 @@ pub fn standing_floor(scene: &Scene, bounds: [f32; 4], spacing: f32) -> Result<V
                 &AffordanceConfig::default(),
             )?;
             let t = pose.torso();
-            Ok(r.valid().then_some(<[f32; 3]>::from(t)))
+            let fits = r.valid()
+                && crate::region::plausible(
+                    scene,
+                    &pose,
+                    Support::Standing,
+                    &AffordanceConfig::default(),
+                )?;
+            Ok(fits.then_some(<[f32; 3]>::from(t)))
         })
         .collect::<Result<_>>()?;
     Ok(found.into_iter().flatten().collect())
@@ -296,11 +314,10 @@ pub fn room_torsos(room: &Room, cfg: &TorsoDataConfig, seed: u64) -> Result<Room
         standing_floor(scene, bounds, cfg.floor_spacing)?,
         TorsoSource::Stand,
     );
-    let mut kinds: Vec<Option<PoseKind>> =
-        crate::afford_all(scene, &torsos, &crate::RegionConfig::default())?
-            .iter()
-            .map(|a| a.valid.filter(|_| a.kept()).map(pose_kind))
-            .collect();
+    let mut kinds: Vec<Option<PoseKind>> = crate::afford_all(scene, &torsos, &judged_in_place())?
+        .iter()
+        .map(|a| a.valid.filter(|_| a.kept()).map(pose_kind))
+        .collect();
     if cfg.affordable_only {
         let mut keep = kinds.iter().map(Option::is_some);
         torsos.retain(|_| keep.next().unwrap_or(false));
@@ -367,7 +384,7 @@ pub fn seat_grid(room: &Room, spacing: f32) -> Result<Vec<([f32; 3], Support)>> 
             }
         }
     }
-    let affords = crate::afford_all(&room.scene, &tries, &crate::RegionConfig::default())?;
+    let affords = crate::afford_all(&room.scene, &tries, &judged_in_place())?;
     Ok(tries
         .into_iter()
         .zip(affords)

@@ -281,7 +281,7 @@ fn the_shipped_local_vae_samples_an_unseen_room() {
         .iter()
         .map(|p| <[f32; 3]>::from(*p))
         .collect();
-    let samples = vae.sample(&points, &SampleOptions::new(1500, 3)).unwrap();
+    let samples = vae.sample(&points, &SampleOptions::new(3000, 3)).unwrap();
     let q = envfield_rooms::region_quality(&room, &samples, &RegionConfig::default()).unwrap();
     assert!(q.affordable_pct > 60.0, "{q:?}");
     assert!(q.floor_coverage_pct > 90.0, "{q:?}");

@@ -171,7 +171,9 @@ impl Catalogue {
                 continue;
             }
             let seat_height = if kind.is_seat() {
-                number("dropOnTopElevation")?.map(|v| v / 100.0).or(Some(h / 100.0))
+                number("dropOnTopElevation")?
+                    .map(|v| v / 100.0)
+                    .or(Some(h / 100.0))
             } else {
                 None
             };
@@ -256,6 +258,59 @@ impl Catalogue {
     }
 }
 
+impl Catalogue {
+    /// Where the middle of item `index`'s seat lies in front of its footprint's centre: along
+    /// the model's middle line from back to front, the longest run of 1 cm steps whose top
+    /// surface lies within 4 cm of `seat_height`; `None` when there is none.
+    ///
+    /// # Errors
+    /// As [`Catalogue::model`].
+    pub fn seat_forward(&self, index: usize, seat_height: f32) -> Result<Option<f32>> {
+        let model = self.model(index)?;
+        let depth = self.items[index].size[1];
+        let steps = (depth / 0.01) as usize;
+        let mut best: Option<(usize, usize)> = None;
+        let mut run: Option<usize> = None;
+        for k in 0..=steps {
+            let y = -depth / 2.0 + k as f32 * 0.01;
+            let on_seat = k < steps
+                && top_at(&model, 0.0, y).is_some_and(|z| (z - seat_height).abs() <= 0.04);
+            match (on_seat, run) {
+                (true, None) => run = Some(k),
+                (false, Some(start)) => {
+                    if best.is_none_or(|(a, b)| k - start > b - a) {
+                        best = Some((start, k));
+                    }
+                    run = None;
+                }
+                _ => {}
+            }
+        }
+        Ok(best.map(|(a, b)| -depth / 2.0 + (a + b) as f32 * 0.005))
+    }
+}
+
+/// The highest surface of `mesh` straight above `(x, y)`, if any.
+fn top_at(mesh: &TriangleMesh, x: f32, y: f32) -> Option<f32> {
+    let mut top: Option<f32> = None;
+    for t in &mesh.triangles {
+        let [a, b, c] = t.map(|i| mesh.vertices[i as usize]);
+        // Barycentric coordinates of (x, y) in the triangle's projection.
+        let det = (b.y - c.y) * (a.x - c.x) + (c.x - b.x) * (a.y - c.y);
+        if det.abs() < 1e-12 {
+            continue;
+        }
+        let l1 = ((b.y - c.y) * (x - c.x) + (c.x - b.x) * (y - c.y)) / det;
+        let l2 = ((c.y - a.y) * (x - c.x) + (a.x - c.x) * (y - c.y)) / det;
+        let l3 = 1.0 - l1 - l2;
+        if l1 >= 0.0 && l2 >= 0.0 && l3 >= 0.0 {
+            let z = l1 * a.z + l2 * b.z + l3 * c.z;
+            top = Some(top.map_or(z, |t| t.max(z)));
+        }
+    }
+    top
+}
+
 /// A room furnished from `catalogue`: walls, doors, sizes and placement as
 /// [`generate_room`](crate::generate_room) makes them with `config` and `seed`, every piece a
 /// catalogue model at its catalogue size. Each kind the catalogue holds is tried once before
@@ -301,6 +356,9 @@ impl Pieces for Models<'_> {
             kind,
             size: it.size,
             seat_height: it.seat_height,
+            seat_forward: it
+                .seat_height
+                .and_then(|h| self.catalogue.seat_forward(item, h).ok().flatten()),
             item,
         }
     }

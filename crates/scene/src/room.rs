@@ -99,6 +99,10 @@ pub struct Furniture {
     pub size: [f32; 3],
     /// Height of the surface a person sits or lies on (chairs, sofas, beds).
     pub seat_height: Option<f32>,
+    /// How far in front of the footprint's centre the seat's middle lies, in its own frame
+    /// (`None`: a tenth of the half-depth for sofas and chairs, whose backs take the rest).
+    #[serde(default)]
+    pub seat_forward: Option<f32>,
 }
 
 impl Furniture {
@@ -106,8 +110,9 @@ impl Furniture {
     pub fn seat_center(&self) -> Option<Point3<f32>> {
         let h = self.seat_height?;
         // Sofas and chairs have a back: the seat's middle sits a little in front of the centre.
-        let forward = match self.kind {
-            ObjectKind::Sofa | ObjectKind::Chair => 0.1 * self.size[1] / 2.0,
+        let forward = match (self.seat_forward, self.kind) {
+            (Some(f), _) => f,
+            (None, ObjectKind::Sofa | ObjectKind::Chair) => 0.1 * self.size[1] / 2.0,
             _ => 0.0,
         };
         let (s, c) = self.yaw.sin_cos();
@@ -169,6 +174,7 @@ pub(crate) struct Piece {
     pub(crate) kind: ObjectKind,
     pub(crate) size: [f32; 3],
     pub(crate) seat_height: Option<f32>,
+    pub(crate) seat_forward: Option<f32>,
     /// The source's own handle (a catalogue item).
     pub(crate) item: usize,
 }
@@ -218,6 +224,7 @@ impl Pieces for Boxes {
             kind,
             size: furniture_size(kind, rng),
             seat_height: seat_height(kind),
+            seat_forward: None,
             item: 0,
         }
     }
@@ -348,6 +355,7 @@ pub(crate) fn furnish(config: &RoomConfig, seed: u64, pieces: &mut dyn Pieces) -
                 yaw,
                 size,
                 seat_height: piece.seat_height,
+                seat_forward: piece.seat_forward,
             });
             break;
         }

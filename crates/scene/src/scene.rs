@@ -161,7 +161,8 @@ pub struct Part {
     /// The primitive it was made from (`None` for a mesh).
     pub primitive: Option<Primitive>,
     /// A mesh's inside, from its shape rather than its normals (see [`Part::mesh`]).
-    occupancy: Option<std::sync::Arc<Occupancy>>,
+    /// Made on the first query: reading a large scene costs nothing until it is asked.
+    occupancy: Option<std::sync::Arc<std::sync::OnceLock<Occupancy>>>,
 }
 
 impl std::fmt::Debug for Part {
@@ -193,7 +194,7 @@ impl Part {
     /// A triangle mesh (already in world coordinates) as it comes: closed or open, in one
     /// piece or many, wound either way. The distance is to the nearest triangle; its sign
     /// ignores the normals. A point is inside when air cannot reach it from outside the mesh's
-    /// box without crossing the surface (a lattice of cells of 2 cm or more; the crate's
+    /// box without crossing the surface (a lattice of cells of 1 cm or more; the crate's
     /// `solid` module): the solid of a closed carcass or of overlapping boxes, a closed
     /// cabinet's hollow. Open shells (a table top modelled as one sheet, a scan) enclose
     /// nothing and stay thin obstacles. An enclosed cavity that spans the mesh like a room (a
@@ -211,7 +212,7 @@ impl Part {
         )
         .map_err(|e| SceneError::InvalidGeometry(format!("mesh: {e}")))?;
         let mut part = Self::from_shape(SharedShape::new(trimesh), Isometry3::identity(), None);
-        part.occupancy = Some(std::sync::Arc::new(Occupancy::of(mesh)));
+        part.occupancy = Some(std::sync::Arc::new(std::sync::OnceLock::new()));
         Ok(part)
     }
 
@@ -229,8 +230,20 @@ impl Part {
     /// For a mesh: the share of its box's cells that are inside, the cell side, and how many
     /// enclosed cavities were taken as rooms (see [`Part::mesh`]). `None` for a primitive.
     pub fn mesh_solidity(&self) -> Option<(f32, f32, usize)> {
-        let o = self.occupancy.as_ref()?;
+        let o = self.occupancy()?;
         Some((o.inside_share(), o.cell(), o.rooms))
+    }
+
+    /// A mesh's occupancy, made on first use from the mesh parry3d holds.
+    fn occupancy(&self) -> Option<&Occupancy> {
+        let lock = self.occupancy.as_ref()?;
+        let mesh = self.shape.as_trimesh()?;
+        Some(lock.get_or_init(|| {
+            Occupancy::of(&TriangleMesh {
+                vertices: mesh.vertices().to_vec(),
+                triangles: mesh.indices().to_vec(),
+            })
+        }))
     }
 
     /// Its world-space bounding box.
@@ -251,7 +264,7 @@ impl Part {
     /// Signed distance from `p` to this part (negative inside), and the projection.
     #[inline]
     fn signed_distance(&self, p: &Point3<f32>) -> (f32, Point3<f32>) {
-        if let Some(occupancy) = &self.occupancy {
+        if let Some(occupancy) = self.occupancy() {
             let proj = self.shape.project_point(&self.pose, p, false);
             let d = nalgebra::distance(p, &proj.point);
             let local = self.pose.inverse_transform_point(p);

@@ -19,8 +19,8 @@ use nalgebra::{Point3, Vector3};
 
 use crate::TriangleMesh;
 
-/// Finest cell side, metres: thinner than a panel a person could slip through is sealed.
-const FINEST: f32 = 0.02;
+/// Finest cell side, metres: a 3 cm table top keeps an inside.
+const FINEST: f32 = 0.01;
 /// At most this many cells per mesh; larger meshes get coarser cells.
 const MAX_CELLS: f32 = 16.0e6;
 /// An enclosed cavity at least this tall (metres) spanning the mesh is a room, not a solid.
@@ -53,7 +53,8 @@ impl Occupancy {
             hi = hi.sup(v);
         }
         let extent = hi - lo;
-        let volume = (extent.x + 2.0 * FINEST) * (extent.y + 2.0 * FINEST) * (extent.z + 2.0 * FINEST);
+        let volume =
+            (extent.x + 2.0 * FINEST) * (extent.y + 2.0 * FINEST) * (extent.z + 2.0 * FINEST);
         let cell = FINEST.max((volume / MAX_CELLS).cbrt());
         // One cell of air on every side, so the flood starts all around.
         let origin = lo - Vector3::repeat(cell);
@@ -78,7 +79,8 @@ impl Occupancy {
     }
 
     fn centre(&self, c: [usize; 3]) -> Point3<f32> {
-        self.origin + Vector3::new(c[0] as f32 + 0.5, c[1] as f32 + 0.5, c[2] as f32 + 0.5) * self.cell
+        self.origin
+            + Vector3::new(c[0] as f32 + 0.5, c[1] as f32 + 0.5, c[2] as f32 + 0.5) * self.cell
     }
 
     /// Marks the cells whose centre lies within half a cell diagonal of the triangle.
@@ -87,7 +89,8 @@ impl Occupancy {
         let lo = a.inf(b).inf(c) - Vector3::repeat(reach);
         let hi = a.sup(b).sup(c) + Vector3::repeat(reach);
         let to_cell = |v: f32, axis: usize| {
-            (((v - self.origin[axis]) / self.cell).floor().max(0.0) as usize).min(self.dims[axis] - 1)
+            (((v - self.origin[axis]) / self.cell).floor().max(0.0) as usize)
+                .min(self.dims[axis] - 1)
         };
         let n = (b - a).cross(&(c - a));
         let normal = n.try_normalize(1e-20);
@@ -124,14 +127,15 @@ impl Occupancy {
         for z in 0..nz {
             for y in 0..ny {
                 for x in 0..nx {
-                    let edge = x == 0 || y == 0 || z == 0 || x == nx - 1 || y == ny - 1 || z == nz - 1;
+                    let edge =
+                        x == 0 || y == 0 || z == 0 || x == nx - 1 || y == ny - 1 || z == nz - 1;
                     if edge {
                         queue.push([x, y, z]);
                     }
                 }
             }
         }
-        self.fill(queue, INSIDE, AIR);
+        self.fill(queue, INSIDE, AIR, false);
         // Each enclosed cavity, labelled in turn; one that spans the mesh like a room is air.
         let mut label = 3u8;
         for start in 0..self.state.len() {
@@ -139,7 +143,7 @@ impl Occupancy {
                 continue;
             }
             let c = [start % nx, (start / nx) % ny, start / (nx * ny)];
-            let cells = self.fill(vec![c], INSIDE, label);
+            let cells = self.fill(vec![c], INSIDE, label, true);
             let (mut lo, mut hi) = ([usize::MAX; 3], [0usize; 3]);
             for c in &cells {
                 for a in 0..3 {
@@ -168,28 +172,50 @@ impl Occupancy {
         }
     }
 
-    /// Turns the 6-connected cells of state `from` reached from `seeds` into `to`; returns them.
-    fn fill(&mut self, seeds: Vec<[usize; 3]>, from: u8, to: u8) -> Vec<[usize; 3]> {
+    /// Turns the 6-connected cells of state `from` reached from `seeds` into `to`; returns them
+    /// when `collect`.
+    fn fill(&mut self, seeds: Vec<[usize; 3]>, from: u8, to: u8, collect: bool) -> Vec<[usize; 3]> {
+        let [nx, ny, nz] = self.dims;
         let mut done = Vec::new();
-        let mut queue = seeds;
-        while let Some(c) = queue.pop() {
+        let mut queue: Vec<u32> = Vec::new();
+        for c in seeds {
             let i = self.index(c);
-            if self.state[i] != from {
-                continue;
+            if self.state[i] == from {
+                self.state[i] = to;
+                queue.push(i as u32);
             }
-            self.state[i] = to;
-            done.push(c);
-            for a in 0..3 {
-                if c[a] > 0 {
-                    let mut d = c;
-                    d[a] -= 1;
-                    queue.push(d);
+        }
+        let (sx, sy) = (1, nx);
+        let sz = nx * ny;
+        while let Some(i) = queue.pop() {
+            let i = i as usize;
+            let c = [i % nx, (i / nx) % ny, i / sz];
+            if collect {
+                done.push(c);
+            }
+            let mut visit = |j: usize, state: &mut Vec<u8>| {
+                if state[j] == from {
+                    state[j] = to;
+                    queue.push(j as u32);
                 }
-                if c[a] + 1 < self.dims[a] {
-                    let mut d = c;
-                    d[a] += 1;
-                    queue.push(d);
-                }
+            };
+            if c[0] > 0 {
+                visit(i - sx, &mut self.state);
+            }
+            if c[0] + 1 < nx {
+                visit(i + sx, &mut self.state);
+            }
+            if c[1] > 0 {
+                visit(i - sy, &mut self.state);
+            }
+            if c[1] + 1 < ny {
+                visit(i + sy, &mut self.state);
+            }
+            if c[2] > 0 {
+                visit(i - sz, &mut self.state);
+            }
+            if c[2] + 1 < nz {
+                visit(i + sz, &mut self.state);
             }
         }
         done

@@ -18,7 +18,8 @@ fn catalogue(test: &str) -> Option<Catalogue> {
     match found {
         Some(dir) => Some(Catalogue::read(dir).expect("the catalogue reads")),
         None => {
-            let reason = "the Sweet Home 3D catalogue is not fetched (scripts/fetch_sweethome3d.sh)";
+            let reason =
+                "the Sweet Home 3D catalogue is not fetched (scripts/fetch_sweethome3d.sh)";
             assert!(
                 std::env::var("CI").as_deref() != Ok("true"),
                 "CI=true: {reason}"
@@ -87,7 +88,11 @@ fn catalogue_models_are_solid_where_closed_and_open_where_people_go() {
                 it.size
             );
         }
-        assert!(lo.z.abs() < 1e-4 && (lo.x + hi.x).abs() < 1e-3, "{}", it.name);
+        assert!(
+            lo.z.abs() < 1e-4 && (lo.x + hi.x).abs() < 1e-3,
+            "{}",
+            it.name
+        );
     }
     // Tables: open space under the top, solid in the top.
     for name in ["Square table", "Round table", "Table"] {
@@ -95,9 +100,17 @@ fn catalogue_models_are_solid_where_closed_and_open_where_people_go() {
         let table = scene_of(&cat.model(item(&cat, name)).unwrap());
         // Halfway between the middle (a round table's foot) and the corner (a leg).
         let (x, y) = (it.size[0] / 4.0, it.size[1] / 4.0);
-        assert!(d(&table, x, y, 0.35) > 0.1, "{name}: under the top {}", d(&table, x, y, 0.35));
+        assert!(
+            d(&table, x, y, 0.35) > 0.1,
+            "{name}: under the top {}",
+            d(&table, x, y, 0.35)
+        );
         let top = table
-            .cast_ray(&Point3::new(0.0, 0.0, 2.0), &-envfield_scene::nalgebra::Vector3::z(), 3.0)
+            .cast_ray(
+                &Point3::new(0.0, 0.0, 2.0),
+                &-envfield_scene::nalgebra::Vector3::z(),
+                3.0,
+            )
             .unwrap()
             .unwrap();
         assert!(
@@ -125,7 +138,11 @@ fn catalogue_models_are_solid_where_closed_and_open_where_people_go() {
             let s = scene_of(&m);
             // A little behind the middle: a piano's keys stand out in front.
             let y = -0.1 * m_depth(&m);
-            assert!(d(&s, 0.0, y, z) < 0.0, "{name} (flipped {flip}): {}", d(&s, 0.0, y, z));
+            assert!(
+                d(&s, 0.0, y, z) < 0.0,
+                "{name} (flipped {flip}): {}",
+                d(&s, 0.0, y, z)
+            );
         }
     }
     // A chair's seat is solid, the space in front of it is not.
@@ -145,7 +162,11 @@ fn catalogue_rooms_hold_every_kind_and_keep_their_floor() {
     let mut seen = std::collections::HashSet::new();
     for seed in 0..4 {
         let room = catalogue_room(&cat, &config, seed).unwrap();
-        assert!(room.furniture.len() >= 4, "seed {seed}: {:?}", room.furniture.len());
+        assert!(
+            room.furniture.len() >= 4,
+            "seed {seed}: {:?}",
+            room.furniture.len()
+        );
         for f in &room.furniture {
             seen.insert(f.kind);
             let o = &room.scene.objects()[f.object];
@@ -155,7 +176,10 @@ fn catalogue_rooms_hold_every_kind_and_keep_their_floor() {
             assert!(b.mins.z.abs() < 0.01 && b.mins.x > -0.01 && b.maxs.x < room.size[0] + 0.01);
         }
         // A metre above the middle of the free floor is air.
-        let floor = room.scene.signed_distance(&Point3::new(0.05, 0.05, 0.02)).unwrap();
+        let floor = room
+            .scene
+            .signed_distance(&Point3::new(0.05, 0.05, 0.02))
+            .unwrap();
         assert!(floor > 0.0 && floor < 0.05, "{floor}");
     }
     assert!(seen.len() >= 6, "{seen:?}");

@@ -283,7 +283,7 @@ fn a_cube_mesh_round_trips_and_has_the_box_distance() {
     std::fs::remove_dir_all(&dir).unwrap();
 
     // The closed cube, wound either way, gives the box's signed distance: the sign comes from
-    // its shape, and within a cell (2 cm) of the surface the distance is unsigned.
+    // its shape, and within a cell (1 cm) of the surface the distance is unsigned.
     let mut inverted = cube.clone();
     for t in &mut inverted.triangles {
         t.swap(1, 2);
@@ -291,7 +291,10 @@ fn a_cube_mesh_round_trips_and_has_the_box_distance() {
     for mesh in [&cube, &inverted] {
         let mesh_scene = Scene::from_mesh("cube", mesh).unwrap();
         let (share, cell, rooms) = mesh_scene.objects()[0].parts()[0].mesh_solidity().unwrap();
-        assert!(share > 0.5 && cell == 0.02 && rooms == 0, "{share} {cell} {rooms}");
+        assert!(
+            share > 0.5 && cell == 0.01 && rooms == 0,
+            "{share} {cell} {rooms}"
+        );
         let mut rng = SplitMix64::new(4);
         for _ in 0..2000 {
             let p = random_point(&mut rng, 1.0);
