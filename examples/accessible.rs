@@ -127,7 +127,7 @@ impl Rooms {
 
     fn room(&self, seed: u64) -> Result<Room> {
         Ok(match &self.0 {
-            Some(c) => catalogue_room(c, &catalogue_config(), seed)?,
+            Some(c) => catalogue_room(c, &RoomConfig::catalogue(), seed)?,
             None => generate_room(&RoomConfig::default(), seed)?,
         })
     }
@@ -149,15 +149,6 @@ fn region_config(args: &Args) -> RegionConfig {
         (config.plausible, config.settle) = (false, 0.0);
     }
     config
-}
-
-/// Real-furniture rooms: the generator's walls and doors, more pieces (the catalogue has
-/// eight kinds).
-fn catalogue_config() -> RoomConfig {
-    RoomConfig {
-        furniture: [6, 9],
-        ..RoomConfig::default()
-    }
 }
 
 /// The learned field's training config: `Field3Config`'s defaults under the `--field-*` flags.

@@ -28,7 +28,9 @@ use envfield::rooms::tables::{finite_mean, Tally};
 use envfield::rooms::{
     check_sample_density, region_key, sample_region, train_field3, AccessibleRegion, Field3Config,
 };
-use envfield::scene::{generate_room, read_scene, ImportConfig, Units, UpAxis};
+use envfield::scene::{
+    catalogue_room, generate_room, read_scene, Catalogue, ImportConfig, RoomConfig, Units, UpAxis,
+};
 use envfield::vae::Cvae;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
@@ -59,6 +61,10 @@ struct Args {
     /// The scene file's units: m, cm, mm, or metres per unit.
     #[arg(long, default_value = "m")]
     units: Units,
+    /// Furnish the rooms with Sweet Home 3D's furniture models instead of the generator's
+    /// boxes (scripts/fetch_sweethome3d.sh fetches them).
+    #[arg(long)]
+    catalogue: bool,
     /// Seed of the generated room (10000 and up were never seen by the VAE).
     #[arg(long, default_value_t = SHIPPED_ROOM)]
     seed: u64,
@@ -109,6 +115,12 @@ struct Args {
     json: bool,
 }
 
+/// Sweet Home 3D's catalogue, fetched by scripts/fetch_sweethome3d.sh.
+fn open_catalogue() -> Result<Catalogue> {
+    let dir = Catalogue::find().context("no catalogue: run scripts/fetch_sweethome3d.sh")?;
+    Ok(Catalogue::read(dir)?)
+}
+
 fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
 }
@@ -137,7 +149,7 @@ fn room_field(
         .field
         .clone()
         .or_else(|| cached.clone().filter(|p| p.is_file()))
-        .or_else(|| Some(shipped).filter(|p| generated && p.is_file()));
+        .or_else(|| Some(shipped).filter(|p| generated && !args.catalogue && p.is_file()));
     if let Some(f) = file.filter(|_| k == 0 || args.field.is_none()) {
         // A kept field carries its region's fingerprint: a file planted or left under the
         // name is not taken for this region's.
@@ -217,6 +229,7 @@ fn main() -> Result<()> {
         .unwrap_or_else(|| root().join("models/vae.safetensors"));
     let vae =
         Cvae::load(&vae_file).with_context(|| format!("loading the VAE {}", vae_file.display()))?;
+    let catalogue = args.catalogue.then(open_catalogue).transpose()?;
     let planners = PlannerKind::ALL;
     let mut tally = Tally::default();
     let mut field_s = Vec::new();
@@ -237,7 +250,10 @@ fn main() -> Result<()> {
                 None,
             ),
             None => {
-                let r = generate_room(&envfield::scene::RoomConfig::default(), seed)?;
+                let r = match &catalogue {
+                    Some(c) => catalogue_room(c, &RoomConfig::catalogue(), seed)?,
+                    None => generate_room(&RoomConfig::default(), seed)?,
+                };
                 (r.scene.clone(), Some(r))
             }
         };
@@ -276,7 +292,10 @@ fn main() -> Result<()> {
             if k == 0 && i == 0 {
                 write_run_files(&args.out, &scene, &region, &runs)?;
             }
-            tally.add(pair.kind, &runs);
+            match &generated {
+                Some(r) => tally.add_in(pair.kind, &runs, r)?,
+                None => tally.add(pair.kind, &runs),
+            }
         }
     }
     // Summaries: per planner over all pairs (Table 3), and per kind (Table 4).

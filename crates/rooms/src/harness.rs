@@ -351,6 +351,24 @@ pub struct PoseShares {
     pub free: f64,
     /// Supported and collision-free.
     pub valid: f64,
+    /// On or inside furniture people do not use that way ([`crate::implausible`]); NaN until
+    /// [`PoseShares::judge`] is told the room's furniture.
+    pub implausible: f64,
+}
+
+impl PoseShares {
+    /// Sets [`PoseShares::implausible`] from `poses` (their torsos) in `room`.
+    ///
+    /// # Errors
+    /// As [`crate::implausible`].
+    pub fn judge(&mut self, poses: &PoseSequence, room: &Room) -> Result<()> {
+        let mut bad = 0usize;
+        for pose in &poses.frames {
+            bad += usize::from(crate::implausible(room, pose.torso().into())?.is_some());
+        }
+        self.implausible = 100.0 * bad as f64 / poses.frames.len().max(1) as f64;
+        Ok(())
+    }
 }
 
 /// The poses of the pair's sequence along `path` (resampled at the sequence's step when
@@ -384,6 +402,7 @@ pub fn fit(
             support: share(&|r| r.supported),
             free: share(&|r| r.collision_free),
             valid: share(&|r| r.valid()),
+            implausible: f64::NAN,
         },
         poses,
     ))

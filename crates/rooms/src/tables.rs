@@ -2,6 +2,7 @@
 //! planner over all pairs) and Table 4 (aligned poses per pair kind), in text and JSON.
 
 use crate::harness::{Outcome, PairKind, PlannerKind, Run};
+use envfield_scene::Room;
 use serde_json::{json, Map, Value};
 use std::collections::BTreeMap;
 use std::fmt::Write;
@@ -36,6 +37,20 @@ impl Tally {
         self.pairs += 1;
     }
 
+    /// Adds one pair's runs in a room whose furniture is known, each path's poses judged for
+    /// plausibility ([`PoseShares::judge`](crate::harness::PoseShares::judge)).
+    ///
+    /// # Errors
+    /// As [`crate::implausible`].
+    pub fn add_in(&mut self, kind: PairKind, runs: &[Run], room: &Room) -> crate::Result<()> {
+        let mut judged = runs.to_vec();
+        for r in &mut judged {
+            r.outcome.poses.judge(&r.poses, room)?;
+        }
+        self.add(kind, &judged);
+        Ok(())
+    }
+
     /// Pairs added.
     pub fn pairs(&self) -> usize {
         self.pairs
@@ -52,7 +67,8 @@ impl Tally {
 
     /// Table 3 as JSON keys into `line` (`<planner>_reach_pct`, `_dist_m`, `_s` (per path, and
     /// `_s_median`), `_goal_s` (per goal), `_room_s` (per room), `_path_ratio`, `_support_pct`,
-    /// `_free_pct`, `_valid_pct`, and for ours `_no_route_pct` and `_relaxed_pct`) and as
+    /// `_free_pct`, `_valid_pct`, `_implausible_pct` (null where the furniture is unknown), and
+    /// for ours `_no_route_pct` and `_relaxed_pct`) and as
     /// text rows.
     pub fn table3(&self, planners: &[PlannerKind], line: &mut Value) -> String {
         let mut text = String::new();
@@ -87,6 +103,7 @@ impl Tally {
             line[format!("{name}_support_pct")] = m(|o| o.poses.support).into();
             line[format!("{name}_free_pct")] = m(|o| o.poses.free).into();
             line[format!("{name}_valid_pct")] = m(|o| o.poses.valid).into();
+            line[format!("{name}_implausible_pct")] = m(|o| o.poses.implausible).into();
             let _ = writeln!(
                 text,
                 "{name:<12} {reach:>9.1} {:>10.3} {:>11.5} {:>11.5} {:>11.5} {:>11}",

@@ -58,6 +58,15 @@ impl RoomConfig {
         }
     }
 
+    /// Rooms furnished from a catalogue ([`catalogue_room`](crate::catalogue_room)): the
+    /// default walls and doors, 6 to 9 pieces (a catalogue holds eight kinds).
+    pub fn catalogue() -> Self {
+        Self {
+            furniture: [6, 9],
+            ..Self::default()
+        }
+    }
+
     fn validate(&self) -> Result<()> {
         let ok = |r: [f32; 2], min: f32| {
             r[0].is_finite() && r[1].is_finite() && r[0] >= min && r[0] <= r[1]

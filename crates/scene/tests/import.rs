@@ -60,3 +60,81 @@ proptest! {
         }
     }
 }
+
+/// Unusual real files: read as z-up when they are y-up, in millimetres, 1000 m from the
+/// origin, with open shells and degenerate faces. Each gives a warning naming the flag, or
+/// the right answer; none a silent nonsense scene.
+#[test]
+fn unusual_files_warn_or_come_out_right() {
+    use envfield_scene::{import_mesh, ImportConfig, Scene, Units, UpAxis};
+    // A 5 x 4 m floor, a 0.75 m table top and two walls (open sheets), z up, metres.
+    let quads: [[[f32; 3]; 4]; 4] = [
+        [[0., 0., 0.], [5., 0., 0.], [5., 4., 0.], [0., 4., 0.]],
+        [
+            [1., 1., 0.75],
+            [2., 1., 0.75],
+            [2., 2., 0.75],
+            [1., 2., 0.75],
+        ],
+        [[0., 0., 0.], [5., 0., 0.], [5., 0., 2.5], [0., 0., 2.5]],
+        [[0., 0., 0.], [0., 4., 0.], [0., 4., 2.5], [0., 0., 2.5]],
+    ];
+    let mut room = TriangleMesh::default();
+    for q in quads {
+        let b = room.vertices.len() as u32;
+        room.vertices
+            .extend(q.iter().map(|v| Point3::new(v[0], v[1], v[2])));
+        room.triangles
+            .extend([[b, b + 1, b + 2], [b, b + 2, b + 3]]);
+    }
+    // A degenerate face (all three corners the same) rides along.
+    room.triangles.push([0, 0, 0]);
+    let yup = TriangleMesh {
+        vertices: room
+            .vertices
+            .iter()
+            .map(|v| Point3::new(v.x, v.z, -v.y))
+            .collect(),
+        triangles: room.triangles.clone(),
+    };
+    let (_, report) = import_mesh(&yup, &ImportConfig::default()).unwrap();
+    assert!(
+        report.warnings.iter().any(|w| w.contains("--up")),
+        "{report}"
+    );
+    let mm = TriangleMesh {
+        vertices: room.vertices.iter().map(|v| v * 1000.0).collect(),
+        triangles: room.triangles.clone(),
+    };
+    let (_, report) = import_mesh(&mm, &ImportConfig::default()).unwrap();
+    assert!(
+        report.warnings.iter().any(|w| w.contains("--units mm")),
+        "{report}"
+    );
+    let (back, report) =
+        import_mesh(&mm, &ImportConfig::new(UpAxis::Z, Units::Millimetres)).unwrap();
+    assert!(report.warnings.is_empty(), "{report}");
+    assert!((report.bounds[1][0] - 5.0).abs() < 1e-3);
+    // 1000 m away and 3 m down: moved back onto its floor at the origin, no warning.
+    let far = TriangleMesh {
+        vertices: room
+            .vertices
+            .iter()
+            .map(|v| Point3::new(v.x + 1000.0, v.y - 1000.0, v.z - 3.0))
+            .collect(),
+        triangles: room.triangles.clone(),
+    };
+    let (moved, report) = import_mesh(&far, &ImportConfig::default()).unwrap();
+    assert!(report.warnings.is_empty(), "{report}");
+    assert!(report.bounds[0].iter().all(|v| v.abs() < 1e-3), "{report}");
+    // Open sheets are thin obstacles: finite distances either side, air above the floor.
+    for mesh in [&back, &moved] {
+        let scene = Scene::from_mesh("room", mesh).unwrap();
+        let above = scene.signed_distance(&Point3::new(3.0, 3.0, 1.0)).unwrap();
+        let below = scene.signed_distance(&Point3::new(3.0, 3.0, -0.3)).unwrap();
+        assert!(
+            (above - 1.0).abs() < 1e-3 && (below - 0.3).abs() < 1e-3,
+            "{above} {below}"
+        );
+    }
+}
