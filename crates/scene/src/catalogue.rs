@@ -239,7 +239,7 @@ impl Catalogue {
             hi = hi.sup(v);
         }
         let extent = hi - lo;
-        if extent.iter().any(|e| !(*e > 0.0)) {
+        if extent.iter().any(|e| e.is_nan() || *e <= 0.0) {
             return Err(SceneError::InvalidGeometry(format!(
                 "{}: the model is flat ({extent:?})",
                 item.model.display()
