@@ -23,7 +23,7 @@ use envfield_grid::SplitMix64;
 use nalgebra::{Point3, Vector3};
 
 use crate::error::{Result, SceneError};
-use crate::room::{at, furnish, shuffle, Piece, Pieces, Room, RoomConfig};
+use crate::room::{at, furnish, kind_at, kind_order, Piece, Pieces, Room, RoomConfig};
 use crate::scene::{ObjectKind, Part, SceneObject};
 use crate::TriangleMesh;
 
@@ -232,12 +232,7 @@ impl Catalogue {
         for v in &mut mesh.vertices {
             *v = Point3::new(-v.x, v.z, v.y);
         }
-        let mut lo = Point3::from([f32::INFINITY; 3]);
-        let mut hi = Point3::from([f32::NEG_INFINITY; 3]);
-        for v in &mesh.vertices {
-            lo = lo.inf(v);
-            hi = hi.sup(v);
-        }
+        let (lo, hi) = crate::mesh::bounds(&mesh.vertices);
         let extent = hi - lo;
         if extent.iter().any(|e| e.is_nan() || *e <= 0.0) {
             return Err(SceneError::InvalidGeometry(format!(
@@ -337,16 +332,11 @@ struct Models<'a> {
 impl Pieces for Models<'_> {
     fn count(&mut self, config: &RoomConfig, rng: &mut SplitMix64) -> usize {
         self.kinds = self.catalogue.kinds();
-        shuffle(&mut self.kinds, rng);
-        config.furniture[0] + rng.below(config.furniture[1] - config.furniture[0] + 1)
+        kind_order(&mut self.kinds, config, rng)
     }
 
     fn pick(&mut self, n: usize, rng: &mut SplitMix64) -> Piece {
-        let kind = if n < self.kinds.len() {
-            self.kinds[n]
-        } else {
-            self.kinds[rng.below(self.kinds.len())]
-        };
+        let kind = kind_at(&self.kinds, n, rng);
         let of_kind: Vec<usize> = (0..self.catalogue.items.len())
             .filter(|&i| self.catalogue.items[i].kind == kind)
             .collect();

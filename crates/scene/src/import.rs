@@ -4,6 +4,7 @@
 //! wrong ([`ImportReport`]), naming the flag that would fix it.
 
 use crate::error::{Result, SceneError};
+use crate::mesh::bounds;
 use crate::TriangleMesh;
 use nalgebra::{Point3, Vector3};
 use std::fmt;
@@ -288,16 +289,6 @@ fn floor_height(bins: &mut [(i64, f32, f32)]) -> Option<f32> {
         .last()
         .map_or(z, |b| b.2);
     Some(top)
-}
-
-fn bounds(points: &[Point3<f32>]) -> (Point3<f32>, Point3<f32>) {
-    let mut lo = Point3::new(f32::INFINITY, f32::INFINITY, f32::INFINITY);
-    let mut hi = -lo;
-    for p in points {
-        lo = lo.inf(p);
-        hi = hi.sup(p);
-    }
-    (lo, hi)
 }
 
 #[cfg(test)]

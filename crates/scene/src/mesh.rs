@@ -332,6 +332,17 @@ pub(crate) fn io(path: &Path, source: std::io::Error) -> SceneError {
     }
 }
 
+/// The corners `(min, max)` of the box around `points` (infinite and inverted for none).
+pub(crate) fn bounds(points: &[Point3<f32>]) -> (Point3<f32>, Point3<f32>) {
+    let mut lo = Point3::from([f32::INFINITY; 3]);
+    let mut hi = Point3::from([f32::NEG_INFINITY; 3]);
+    for p in points {
+        lo = lo.inf(p);
+        hi = hi.sup(p);
+    }
+    (lo, hi)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -198,6 +198,25 @@ pub(crate) trait Pieces {
     fn build(&self, piece: &Piece, n: usize, center: [f32; 2], yaw: f32) -> Result<SceneObject>;
 }
 
+/// Shuffles `kinds` (the order pieces are tried in) and draws how many pieces to try.
+pub(crate) fn kind_order(
+    kinds: &mut [ObjectKind],
+    config: &RoomConfig,
+    rng: &mut SplitMix64,
+) -> usize {
+    shuffle(kinds, rng);
+    config.furniture[0] + rng.below(config.furniture[1] - config.furniture[0] + 1)
+}
+
+/// The `n`th piece's kind: each kind once in the shuffled order, then any at random.
+pub(crate) fn kind_at(kinds: &[ObjectKind], n: usize, rng: &mut SplitMix64) -> ObjectKind {
+    if n < kinds.len() {
+        kinds[n]
+    } else {
+        kinds[rng.below(kinds.len())]
+    }
+}
+
 /// Whether a piece of `kind` stands with its back to a wall, facing the room.
 pub(crate) fn against_wall(kind: ObjectKind) -> bool {
     !matches!(kind, ObjectKind::Chair | ObjectKind::Table)
@@ -219,16 +238,11 @@ impl Pieces for Boxes {
             ObjectKind::Desk,
             ObjectKind::Cabinet,
         ];
-        shuffle(&mut self.kinds, rng);
-        config.furniture[0] + rng.below(config.furniture[1] - config.furniture[0] + 1)
+        kind_order(&mut self.kinds, config, rng)
     }
 
     fn pick(&mut self, n: usize, rng: &mut SplitMix64) -> Piece {
-        let kind = if n < self.kinds.len() {
-            self.kinds[n]
-        } else {
-            self.kinds[rng.below(self.kinds.len())]
-        };
+        let kind = kind_at(&self.kinds, n, rng);
         Piece {
             kind,
             size: furniture_size(kind, rng),
@@ -387,7 +401,7 @@ fn floor_connected(scene: &Scene) -> Result<bool> {
     Ok(map.grid.free_components().count() == 1)
 }
 
-pub(crate) fn shuffle<T>(items: &mut [T], rng: &mut SplitMix64) {
+fn shuffle<T>(items: &mut [T], rng: &mut SplitMix64) {
     for i in (1..items.len()).rev() {
         items.swap(i, rng.below(i + 1));
     }

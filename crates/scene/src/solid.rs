@@ -46,12 +46,7 @@ pub(crate) struct Occupancy {
 impl Occupancy {
     /// The occupancy of `mesh` (validated: finite, indices in range).
     pub(crate) fn of(mesh: &TriangleMesh) -> Self {
-        let mut lo = Point3::from([f32::INFINITY; 3]);
-        let mut hi = Point3::from([f32::NEG_INFINITY; 3]);
-        for v in &mesh.vertices {
-            lo = lo.inf(v);
-            hi = hi.sup(v);
-        }
+        let (lo, hi) = crate::mesh::bounds(&mesh.vertices);
         let extent = hi - lo;
         let volume =
             (extent.x + 2.0 * FINEST) * (extent.y + 2.0 * FINEST) * (extent.z + 2.0 * FINEST);
