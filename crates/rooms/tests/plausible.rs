@@ -1,0 +1,122 @@
+//! Plausible poses and the implausibility measure, against a known answer: a table in an
+//! otherwise empty room. A body standing with the table top between its knees and hips has
+//! every joint clear, so the joint checks pass it; the bone check does not.
+
+use envfield_affordance::{
+    bones_clear, check_pose, sit_down, standing_pose, AffordanceConfig, Pose, SitConfig, Support,
+};
+use envfield_rooms::{afford, implausible, plausible, RegionConfig};
+use envfield_scene::nalgebra::{Isometry3, Vector3};
+use envfield_scene::{Furniture, ObjectKind, Primitive, Room, Scene, SceneObject};
+
+/// A 4 x 4 m floor and a 1.2 x 0.8 m table, its 4 cm top at 0.70-0.74 m, centred at (2, 2).
+fn table_room() -> Room {
+    let at = |x: f32, y: f32, z: f32| Isometry3::translation(x, y, z);
+    let mut scene = Scene::new();
+    let floor = SceneObject::new("floor", ObjectKind::Floor)
+        .with(Primitive::cuboid([4.0, 4.0, 0.1]), at(2.0, 2.0, -0.05))
+        .unwrap();
+    scene.add(floor).unwrap();
+    let mut table = SceneObject::new("table", ObjectKind::Table)
+        .with(Primitive::cuboid([1.2, 0.8, 0.04]), at(2.0, 2.0, 0.72))
+        .unwrap();
+    for (dx, dy) in [(-0.55, -0.35), (0.55, -0.35), (-0.55, 0.35), (0.55, 0.35)] {
+        table = table
+            .with(
+                Primitive::cuboid([0.05, 0.05, 0.7]),
+                at(2.0 + dx, 2.0 + dy, 0.35),
+            )
+            .unwrap();
+    }
+    let object = scene.add(table).unwrap();
+    Room {
+        scene,
+        size: [4.0, 4.0],
+        furniture: vec![Furniture {
+            kind: ObjectKind::Table,
+            object,
+            center: [2.0, 2.0],
+            yaw: 0.0,
+            size: [1.2, 0.8, 0.74],
+            seat_height: None,
+            seat_forward: None,
+        }],
+    }
+}
+
+/// `pose` moved so its torso is at `(x, y)` and its lowest joint at height `low`.
+fn placed(pose: Pose, x: f32, y: f32, low: f32) -> Pose {
+    let t = pose.torso();
+    let bottom = pose
+        .joints
+        .iter()
+        .map(|j| j.z)
+        .fold(f32::INFINITY, f32::min);
+    pose.translated(&Vector3::new(x - t.x, y - t.y, low - bottom))
+}
+
+#[test]
+fn a_body_standing_through_a_table_top_passes_the_joints_but_not_the_bones() {
+    let room = table_room();
+    let config = AffordanceConfig::default();
+    // Feet on the floor under the table's middle: the top lies between knees and hips.
+    let through = placed(standing_pose(), 2.0, 2.0, 0.05);
+    let r = check_pose(&room.scene, &through, Support::Standing, &config).unwrap();
+    assert!(r.valid(), "the joint checks should not see it: {r:?}");
+    assert!(!bones_clear(
+        &room.scene,
+        &through,
+        Support::Standing,
+        &config,
+        0.03,
+        0.02
+    )
+    .unwrap());
+    assert!(!plausible(&room.scene, &through, Support::Standing, &config).unwrap());
+    let torso: [f32; 3] = through.torso().into();
+    assert_eq!(implausible(&room, torso).unwrap(), Some(ObjectKind::Table));
+    // The filter keeps that torso only with the rule off.
+    let on = RegionConfig::default();
+    let off = RegionConfig {
+        plausible: false,
+        settle: 0.0,
+        ..on
+    };
+    assert!(afford(&room.scene, torso, &off).unwrap().kept());
+    assert!(!afford(&room.scene, torso, &on).unwrap().kept());
+
+    // The same body on the open floor is plausible, and so is its torso.
+    let open = placed(standing_pose(), 0.8, 0.8, 0.05);
+    assert!(plausible(&room.scene, &open, Support::Standing, &config).unwrap());
+    assert_eq!(implausible(&room, open.torso().into()).unwrap(), None);
+    assert!(afford(&room.scene, open.torso().into(), &on)
+        .unwrap()
+        .kept());
+}
+
+#[test]
+fn a_body_seated_on_a_table_top_hangs_its_feet_and_is_implausible() {
+    let room = table_room();
+    let config = AffordanceConfig::default();
+    let seated = *sit_down(&SitConfig::default())
+        .unwrap()
+        .frames
+        .last()
+        .unwrap();
+    // Hips on the top's middle, 0.1 m above it (where a pelvis joint sits on a seat).
+    let t = seated.torso();
+    let on_top = seated.translated(&Vector3::new(2.0 - t.x, 2.0 - t.y, 0.84 - t.z));
+    let r = check_pose(&room.scene, &on_top, Support::Sitting, &config).unwrap();
+    assert!(r.supported, "{r:?}");
+    assert!(!plausible(&room.scene, &on_top, Support::Sitting, &config).unwrap());
+    assert_eq!(
+        implausible(&room, on_top.torso().into()).unwrap(),
+        Some(ObjectKind::Table)
+    );
+    // Implausible is judged by the known furniture: inside the table's box too.
+    assert_eq!(
+        implausible(&room, [2.3, 2.1, 0.4]).unwrap(),
+        Some(ObjectKind::Table)
+    );
+    assert!(implausible(&room, [f32::NAN, 0.0, 0.0]).is_err());
+}
