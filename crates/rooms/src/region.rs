@@ -72,6 +72,14 @@ impl Default for RegionConfig {
 }
 
 impl RegionConfig {
+    /// The same filter, each torso judged where it is (no settling).
+    pub fn in_place(&self) -> Self {
+        Self {
+            settle: 0.0,
+            ..*self
+        }
+    }
+
     fn validate(&self) -> Result<()> {
         let ok = self.torso_radius.is_finite()
             && self.torso_radius >= 0.0
@@ -377,10 +385,7 @@ impl AccessibleRegion {
         if !config.plausible {
             return Self::from_samples(scene, kept, config.voxel);
         }
-        let in_place = RegionConfig {
-            settle: 0.0,
-            ..*config
-        };
+        let in_place = config.in_place();
         Self::build(scene, kept, config.voxel, |centres| {
             Ok(afford_all(scene, centres, &in_place)?
                 .iter()

@@ -32,8 +32,14 @@ pub struct Tally {
 impl Tally {
     /// Adds one pair's runs.
     pub fn add(&mut self, kind: PairKind, runs: &[Run]) {
-        let entry = self.by_kind.entry(kind.name()).or_default();
-        entry.extend(runs.iter().map(|r| (r.planner, r.outcome.clone())));
+        self.push(kind, runs.iter().map(|r| (r.planner, r.outcome.clone())));
+    }
+
+    fn push(&mut self, kind: PairKind, outcomes: impl IntoIterator<Item = (PlannerKind, Outcome)>) {
+        self.by_kind
+            .entry(kind.name())
+            .or_default()
+            .extend(outcomes);
         self.pairs += 1;
     }
 
@@ -43,11 +49,13 @@ impl Tally {
     /// # Errors
     /// As [`crate::implausible`].
     pub fn add_in(&mut self, kind: PairKind, runs: &[Run], room: &Room) -> crate::Result<()> {
-        let mut judged = runs.to_vec();
-        for r in &mut judged {
-            r.outcome.poses.judge(&r.poses, room)?;
+        let mut judged = Vec::with_capacity(runs.len());
+        for r in runs {
+            let mut outcome = r.outcome.clone();
+            outcome.poses.judge(&r.poses, room)?;
+            judged.push((r.planner, outcome));
         }
-        self.add(kind, &judged);
+        self.push(kind, judged);
         Ok(())
     }
 

@@ -148,10 +148,7 @@ fn standing_at(x: f32, y: f32) -> Pose {
 /// The region's filter, each torso judged where it is (no settling): training data keeps
 /// the torsos it judged.
 fn judged_in_place() -> crate::RegionConfig {
-    crate::RegionConfig {
-        settle: 0.0,
-        ..crate::RegionConfig::default()
-    }
+    crate::RegionConfig::default().in_place()
 }
 
 /// The torso locations of every standing pose on a floor grid of `spacing` metres over
