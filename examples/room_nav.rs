@@ -22,6 +22,7 @@ use anyhow::{bail, Context, Result};
 use clap::Parser;
 use envfield::affordance::{walk, WalkConfig};
 use envfield::nets::{FieldNet, ModelConfig};
+use envfield::plan::space3::SamplingConfig;
 use envfield::rooms::harness::{pairs, run_pair, PairKind, PlannerKind, RoomContext, RunSettings};
 use envfield::rooms::pictures::write_run_files;
 use envfield::rooms::tables::{finite_mean, Tally};
@@ -271,8 +272,8 @@ fn main() -> Result<()> {
         let room = RoomContext {
             scene: &scene,
             region: &region,
-            net: &net,
-            distances: &distances,
+            net: Some(&net),
+            distances: Some(&distances),
             distances_s,
             navmesh: mesh.as_ref().map(|m| (m as &dyn FloorPlanner, m.build_s)),
         };
@@ -286,6 +287,7 @@ fn main() -> Result<()> {
             let settings = RunSettings {
                 budget,
                 big_budget: args.big_budget,
+                sampler_budget: SamplingConfig::default().budget,
                 seed: seed + i as u64,
             };
             let runs = run_pair(&room, pair, &room_planners, &settings)?;

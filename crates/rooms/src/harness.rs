@@ -471,6 +471,8 @@ pub struct RunSettings {
     pub budget: f64,
     /// RRT*'s second budget (`rrtstar_big`).
     pub big_budget: usize,
+    /// RRT's and RRT*'s iterations and PRM's roadmap samples (the paper: 500, in a room).
+    pub sampler_budget: usize,
     /// The samplers' seed.
     pub seed: u64,
 }
@@ -484,10 +486,12 @@ pub struct RoomContext<'a> {
     /// The accessible region (the free space of every planner but the navigation mesh and
     /// the line).
     pub region: &'a AccessibleRegion,
-    /// The room's learned 3D field.
-    pub net: &'a FieldNet,
-    /// The scene's signed distances sampled at [`DISTANCE_CELL`] ([`RoomContext::distances`]).
-    pub distances: &'a DistanceGrid,
+    /// The room's learned 3D field; without one the planners that descend it cannot run (a
+    /// scene no field was trained for).
+    pub net: Option<&'a FieldNet>,
+    /// The scene's signed distances sampled at [`DISTANCE_CELL`] ([`RoomContext::distances`]);
+    /// without them ours' checks ask the scene itself (a scene too large to sample).
+    pub distances: Option<&'a DistanceGrid>,
     /// Seconds the distance grid took.
     pub distances_s: f64,
     /// A navigation mesh of the scene and the seconds its build took.
@@ -517,7 +521,10 @@ impl RoomContext<'_> {
     pub fn bytes(&self) -> [(&'static str, usize); 4] {
         [
             ("region_bytes", self.region.grid.len()),
-            ("distances_bytes", self.distances.bytes()),
+            (
+                "distances_bytes",
+                self.distances.map_or(0, DistanceGrid::bytes),
+            ),
             ("field_per_goal_bytes", 4 * self.region.grid.len()),
             ("navmesh_bytes", self.navmesh.map_or(0, |(m, _)| m.bytes())),
         ]
@@ -604,21 +611,26 @@ pub fn run_pair(
     let exact = ExactField3::at_cell(region, goal_cell)?;
     let exact_s = t.elapsed().as_secs_f64();
     let shortest = exact.value(pair.start)? as f64;
-    let learned = LearnedField3::new(room.net, region, goal_cell)?;
-    let table = if planners
-        .iter()
-        .any(|p| p.field() == Some(FieldKind::LearnedTable))
-    {
-        let t = Instant::now();
-        let table = learned.tabulate(region)?;
-        Some((table, t.elapsed().as_secs_f64()))
-    } else {
-        None
+    let learned = room
+        .net
+        .map(|net| LearnedField3::new(net, region, goal_cell))
+        .transpose()?;
+    let table = match &learned {
+        Some(learned)
+            if planners
+                .iter()
+                .any(|p| p.field() == Some(FieldKind::LearnedTable)) =>
+        {
+            let t = Instant::now();
+            let table = learned.tabulate(region)?;
+            Some((table, t.elapsed().as_secs_f64()))
+        }
+        _ => None,
     };
     let mut setup = PairSetup::new(
         room.scene,
         region,
-        Some(room.distances),
+        room.distances,
         pair,
         shortest,
         settings.budget,
@@ -626,10 +638,11 @@ pub fn run_pair(
         settings.seed,
     );
     setup.navmesh = room.navmesh.map(|(m, _)| m);
+    setup.sampling.budget = settings.sampler_budget;
     let mut out = Vec::with_capacity(planners.len());
     for &planner in planners {
         let (field, goal_seconds): (Option<&dyn ContinuousField3>, f64) = match planner.field() {
-            Some(FieldKind::Learned) => (Some(&learned), 0.0),
+            Some(FieldKind::Learned) => (learned.as_ref().map(|l| l as &dyn ContinuousField3), 0.0),
             Some(FieldKind::LearnedTable) => match &table {
                 Some((t, s)) => (Some(t), *s),
                 None => (None, 0.0),

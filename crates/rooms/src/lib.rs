@@ -48,6 +48,7 @@ pub mod harness;
 mod nav;
 pub mod pictures;
 pub mod region;
+mod surfaces;
 pub mod tables;
 mod torsos;
 
@@ -63,6 +64,7 @@ pub use region::{
     afford, afford_all, covered_pct, drawn_summary, implausible, plausible, region_quality,
     uniform_in_room, AccessibleRegion, Afford, RegionConfig, RegionQuality,
 };
+pub use surfaces::{standing_torsos, MAX_COLUMNS, MAX_SLOPE_DEG};
 pub use torsos::{
     lie_on, pose_kind, room_torsos, rooms_torsos, seat_grid, seat_torsos, sit_on, standing_floor,
     TorsoDataConfig,

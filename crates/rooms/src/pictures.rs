@@ -29,23 +29,94 @@ pub fn planner_colour(planner: PlannerKind) -> [u8; 3] {
 /// A top view, 6 pixels a voxel: accessible columns light, the rest dark, every planner's
 /// path in its colour, the first path's start green and goal magenta.
 pub fn top_view(region: &AccessibleRegion, paths: &[(PlannerKind, Vec<Point3m>)]) -> Canvas {
+    plan_view(region, 6, paths, |_| [225, 232, 220])
+}
+
+/// A top view for a scene of several levels, `scale` pixels a voxel: each accessible column
+/// coloured by the height of its highest accessible voxel (dark blue low, yellow high), every
+/// path in its planner's colour, each path's start green and goal magenta.
+pub fn height_view(
+    region: &AccessibleRegion,
+    scale: u32,
+    paths: &[(PlannerKind, Vec<Point3m>)],
+) -> Canvas {
+    // Colours span the region's own heights, not the scene's box.
+    let nz = region.frame.shape[2];
+    let (lo, hi) = region
+        .free_indices()
+        .iter()
+        .fold((usize::MAX, 0), |(lo, hi), &i| {
+            (lo.min(i % nz), hi.max(i % nz))
+        });
+    let span = hi.saturating_sub(lo).max(1) as f32;
+    let mut img = plan_view(region, scale.max(1), &[], |z| {
+        height_colour(z.saturating_sub(lo) as f32 / span)
+    });
+    let to_px = pixel_of(region, scale.max(1));
+    for (planner, pts) in paths {
+        let c = planner_colour(*planner);
+        for w in pts.windows(2) {
+            img.segment(to_px(w[0]), to_px(w[1]), 1, c);
+        }
+    }
+    for (_, pts) in paths {
+        if let (Some(&a), Some(&b)) = (pts.first(), pts.last()) {
+            let (a, b) = (to_px(a), to_px(b));
+            img.dot(a.0, a.1, 3, [30, 200, 30]);
+            img.dot(b.0, b.1, 3, [220, 30, 220]);
+        }
+    }
+    img
+}
+
+/// A height from 0 (low) to 1 (high) as a colour from dark blue through teal and green to
+/// yellow.
+fn height_colour(t: f32) -> [u8; 3] {
+    const STOPS: [[f32; 3]; 4] = [
+        [40.0, 50.0, 140.0],
+        [30.0, 140.0, 150.0],
+        [110.0, 190.0, 80.0],
+        [250.0, 225.0, 60.0],
+    ];
+    let t = t.clamp(0.0, 1.0) * (STOPS.len() - 1) as f32;
+    let i = (t as usize).min(STOPS.len() - 2);
+    let f = t - i as f32;
+    [0, 1, 2].map(|c| (STOPS[i][c] + f * (STOPS[i + 1][c] - STOPS[i][c])) as u8)
+}
+
+/// A world point's pixel in a top view of `scale` pixels a voxel.
+fn pixel_of(region: &AccessibleRegion, scale: u32) -> impl Fn(Point3m) -> (f32, f32) + '_ {
+    let ny = region.frame.shape[1];
+    move |p: Point3m| {
+        let s = scale as f32;
+        let x = (p[0] - region.frame.origin.x) / region.frame.voxel * s;
+        let y = (ny as f32 * s) - (p[1] - region.frame.origin.y) / region.frame.voxel * s;
+        (x, y)
+    }
+}
+
+/// The region from above, `s` pixels a voxel, each accessible column in `colour` of its
+/// highest accessible voxel's index; the first path's start and goal marked.
+fn plan_view(
+    region: &AccessibleRegion,
+    s: u32,
+    paths: &[(PlannerKind, Vec<Point3m>)],
+    colour: impl Fn(usize) -> [u8; 3],
+) -> Canvas {
     let [nx, ny, nz] = region.frame.shape;
-    let s = 6u32;
     let mut img = Canvas::new(nx as u32 * s, ny as u32 * s, [40, 40, 48]);
     for x in 0..nx {
         for y in 0..ny {
-            if (0..nz).any(|z| region.grid.is_free(Cell3::new(x, y, z))) {
+            if let Some(z) = (0..nz)
+                .rev()
+                .find(|&z| region.grid.is_free(Cell3::new(x, y, z)))
+            {
                 let (px, py) = (x as i64 * s as i64, (ny - 1 - y) as i64 * s as i64);
-                img.fill(px, py, s, s, [225, 232, 220]);
+                img.fill(px, py, s, s, colour(z));
             }
         }
     }
-    let to_px = |p: Point3m| {
-        let x = (p[0] - region.frame.origin.x) / region.frame.voxel * s as f32;
-        let y =
-            (ny as f32 * s as f32) - (p[1] - region.frame.origin.y) / region.frame.voxel * s as f32;
-        (x, y)
-    };
+    let to_px = pixel_of(region, s);
     for (planner, pts) in paths {
         let c = planner_colour(*planner);
         for w in pts.windows(2) {

@@ -206,14 +206,15 @@ fn ours_reads_its_field_and_distances_once_and_the_costs_are_split() {
     let mut room = RoomContext {
         scene: &scene,
         region: &region,
-        net: &net,
-        distances: &distances,
+        net: Some(&net),
+        distances: Some(&distances),
         distances_s,
         navmesh: None,
     };
     let settings = RunSettings {
         budget: 20.0,
         big_budget: 1000,
+        sampler_budget: 500,
         seed: 1,
     };
     let e = run_pair(&room, &pair, &[PlannerKind::Navmesh], &settings)

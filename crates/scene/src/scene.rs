@@ -562,10 +562,41 @@ impl Scene {
                 "ray max_distance must be >= 0, got {max_distance}"
             )));
         }
-        Ok(self.cast_normalised(&Ray::new(*origin, dir), max_distance))
+        Ok(self.cast_normalised(&Ray::new(*origin, dir), max_distance, true))
     }
 
-    fn cast_normalised(&self, ray: &Ray, max_distance: f32) -> Option<RayHit> {
+    /// Every surface the ray from `origin` along `direction` meets within `max_distance`, in
+    /// order, at most `limit` of them: a solid's far side too (a slab's top, then its
+    /// underside, then the floor beneath). Surfaces closer than 1 mm to the one before count
+    /// once.
+    ///
+    /// # Errors
+    /// As [`Scene::cast_ray`].
+    pub fn surfaces_along(
+        &self,
+        origin: &Point3<f32>,
+        direction: &Vector3<f32>,
+        max_distance: f32,
+        limit: usize,
+    ) -> Result<Vec<RayHit>> {
+        // Validated as a single cast is.
+        self.cast_ray(origin, direction, 0.0)?;
+        let dir = direction.normalize();
+        let mut out: Vec<RayHit> = Vec::new();
+        let mut from = 0.0;
+        while out.len() < limit && from <= max_distance {
+            let ray = Ray::new(origin + dir * from, dir);
+            let Some(mut hit) = self.cast_normalised(&ray, max_distance - from, false) else {
+                break;
+            };
+            hit.distance += from;
+            from = hit.distance + 1e-3;
+            out.push(hit);
+        }
+        Ok(out)
+    }
+
+    fn cast_normalised(&self, ray: &Ray, max_distance: f32, solid: bool) -> Option<RayHit> {
         let mut best: Option<RayHit> = None;
         let mut limit = max_distance;
         for (i, object) in self.objects.iter().enumerate() {
@@ -581,7 +612,7 @@ impl Scene {
                 }
                 if let Some(hit) = part
                     .shape
-                    .cast_ray_and_get_normal(&part.pose, ray, limit, true)
+                    .cast_ray_and_get_normal(&part.pose, ray, limit, solid)
                 {
                     limit = hit.time_of_impact;
                     best = Some(RayHit {
