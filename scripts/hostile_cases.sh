@@ -93,4 +93,10 @@ run 36-15 60 $BIN/train_vae --rooms 1 --scenes 16 --torsos 10000000 --out $T/v15
 run 36-16a 60 $BIN/train_birdseye --goals-per-room $huge --out $T/be16.safetensors
 run 36-16b 60 $BIN/train_birdseye --rooms $huge --out $T/be16.safetensors
 run 36-17 60 $BIN/birdseye_multi --room $T/big_room.obj --out $T/be17
+run 36-5 60 $BIN/accessible --scene $T/big_room.obj --no-field --out $T/acc5
+# Recast's levels (scripts/fetch_recast_levels.sh): a region from their surfaces.
+if [ -f data/recast/dungeon.obj ]; then
+    run 36-6a 300 $BIN/level --scene data/recast/dungeon.obj --json --out $T/lv6a
+    run 36-6b 300 $BIN/level --scene data/recast/nav_test.obj --json --out $T/lv6b
+fi
 run 36-18 60 $BIN/train_birdseye --rooms 2 --eval-rooms 2 --steps 10 --resume --out $T/be18.safetensors

@@ -428,7 +428,7 @@ fn accessible_refuses_floors_too_large_and_warns_of_thin_samples() {
     let big = write(&dir, "big.obj", &floor(100.0));
     let t = std::time::Instant::now();
     let args = ["--scene", &big, "--no-field", "--out", &out];
-    refuses(run(&accessible, &args), "not supported yet");
+    refuses(run(&accessible, &args), "the `level` example");
     assert!(t.elapsed().as_secs() < 10, "{:?}", t.elapsed());
     let mid = write(&dir, "mid.obj", &floor(20.0));
     let done = run(
@@ -539,5 +539,75 @@ fn room_nav_refuses_planted_fields_and_keeps_what_links_point_at() {
             refuses(o, "locked/out");
         }
     }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn level_walks_up_a_ramp_and_refuses_a_level_of_one_floor() {
+    let Some(level) = example("level") else {
+        return;
+    };
+    let dir = scratch("level");
+    let out = dir.join("out").to_string_lossy().into_owned();
+    // A floor 9 x 3 m, a platform 1 m up over x in [5, 9] (its top and its front), and a ramp
+    // from x = 2 up to the platform's edge: open sheets, as game levels often are.
+    let two = write(
+        &dir,
+        "two.obj",
+        "v 0 0 0\nv 9 0 0\nv 9 3 0\nv 0 3 0\nf 1 2 3\nf 1 3 4\n\
+         v 5 0 1\nv 9 0 1\nv 9 3 1\nv 5 3 1\nf 5 6 7\nf 5 7 8\n\
+         v 5 0 0\nv 5 3 0\nf 9 10 8\nf 9 8 5\n\
+         v 2 0 0\nv 2 3 0\nf 11 5 8\nf 11 8 12\n",
+    );
+    let args = |scene: &str, rise: &str| {
+        [
+            "--scene",
+            scene,
+            "--up",
+            "z",
+            "--voxel",
+            "0.1",
+            "--pairs",
+            "2",
+            "--goals",
+            "1",
+            "--rise",
+            rise,
+            "--sampler-budget",
+            "500",
+            "--json",
+            "--out",
+            &out,
+        ]
+        .map(str::to_owned)
+    };
+    let done = Command::new(&level).args(args(&two, "0.6")).output().unwrap();
+    let stdout = String::from_utf8_lossy(&done.stdout);
+    assert!(
+        done.status.success(),
+        "{}",
+        String::from_utf8_lossy(&done.stderr)
+    );
+    let summary: serde_json::Value =
+        serde_json::from_str(stdout.lines().last().unwrap()).unwrap();
+    assert_eq!(summary["pairs"], 2, "{summary}");
+    assert!(summary["rise_m_mean"].as_f64().unwrap() >= 0.6, "{summary}");
+    assert_eq!(summary["ours_exact_reach_pct"], 100.0, "{summary}");
+    // One floor: nothing to climb, said so.
+    let flat = write(
+        &dir,
+        "flat.obj",
+        "v 0 0 0\nv 6 0 0\nv 6 3 0\nv 0 3 0\nf 1 2 3\nf 1 3 4\n",
+    );
+    let a = args(&flat, "0.6");
+    refuses(
+        run(&level, &a.each_ref().map(String::as_str)),
+        "its levels are not joined",
+    );
+    let a = args(&dir.join("missing.obj").to_string_lossy(), "0.6");
+    refuses(
+        run(&level, &a.each_ref().map(String::as_str)),
+        "fetch_recast_levels.sh",
+    );
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -97,8 +97,9 @@ pub fn check_sample_density(scene: &Scene, samples: usize) -> Result<Option<Stri
         return Err(RoomsError::InvalidInput(format!(
             "the scene's floor spans {:.0} x {:.0} m ({area:.0} m²): a region drawn from torso \
              samples needs about {needed:.0} of them ({SAMPLES_PER_M2} a square metre), more than \
-             the {MAX_SAMPLES} allowed; scenes this large are not supported yet (is it in \
-             centimetres? --units cm)",
+             the {MAX_SAMPLES} allowed: build a scene this large's region from its surfaces \
+             instead (the `level` example, AccessibleRegion::standing), or is it in \
+             centimetres? (--units cm)",
             extent.x, extent.y
         )));
     }

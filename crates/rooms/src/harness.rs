@@ -125,10 +125,11 @@ impl PlannerKind {
         Ok(match self {
             PlannerKind::Ours => search.search_relaxed(field()?, poses, region, start, goal)?,
             PlannerKind::OursRaw => {
-                // The paper's search: its poses checked against the scene itself, no cap on
-                // the checks.
+                // The paper's search: its poses checked against the scene itself for support
+                // and collisions only, no cap on the checks.
                 let exact = PoseFilter {
                     distances: None,
+                    clear_beneath: false,
                     ..*poses
                 };
                 let paper = FieldSearch3 {
@@ -567,6 +568,7 @@ impl<'a> PairSetup<'a> {
                 // A walk faces where it goes; a sit-down keeps the heading made for its seat.
                 face_the_move: pair.repeat,
                 affordance: Default::default(),
+                clear_beneath: true,
                 distances,
             },
             search: {

@@ -2,12 +2,14 @@
 //! planners in envfield-plan ([`FieldSearch3`](envfield_plan::space3::FieldSearch3), RRT, RRT*, PRM).
 
 use crate::AccessibleRegion;
-use envfield_affordance::{check_pose, pose_valid, AffordanceConfig, PoseSequence};
+use envfield_affordance::{
+    check_pose, pose_valid, AffordanceConfig, Joint, Pose, PoseSequence, Support,
+};
 use envfield_grid::{Cell3, Point3m, SplitMix64};
 use envfield_plan::space3::{Space3, StepFilter};
 use envfield_plan::PlanError;
 use envfield_scene::nalgebra::{Point3, Vector3};
-use envfield_scene::{DistanceGrid, Scene};
+use envfield_scene::{DistanceGrid, Scene, SignedDistance};
 
 /// The region's free space: a torso is allowed in an accessible voxel. Samples are uniform
 /// over the accessible voxels, each jittered within its voxel.
@@ -63,6 +65,11 @@ pub struct PoseFilter<'a> {
     pub face_the_move: bool,
     /// The checks' tolerances.
     pub affordance: AffordanceConfig,
+    /// A standing step must have air straight beneath its pelvis down to its knees' height
+    /// ([`clear_beneath`]): nothing between the legs. The region's voxels passed the
+    /// filter at their centres; a torso elsewhere in a voxel beside a table may stand with
+    /// its pelvis over the table's edge, every joint clear.
+    pub clear_beneath: bool,
     /// The scene's distances sampled once per room: when set, the search's checks
     /// ([`StepFilter::keep`]) read them instead of the scene, a few lookups per joint instead
     /// of a pass over the scene's parts. [`PoseFilter::poses_along`], which scores a path,
@@ -170,15 +177,51 @@ impl StepFilter for PoseFilter<'_> {
                     return Ok(false);
                 }
                 let pose = self.placed(step, from, c);
-                match self.distances {
+                let valid = match self.distances {
                     Some(grid) => pose_valid(grid, &pose, support, &self.affordance),
                     None => pose_valid(self.scene, &pose, support, &self.affordance),
+                }
+                .map_err(|e| PlanError::Invalid(format!("pose check: {e}")))?;
+                if !(valid && self.clear_beneath && support == Support::Standing) {
+                    return Ok(valid);
+                }
+                match self.distances {
+                    Some(grid) => clear_beneath(grid, &pose),
+                    None => clear_beneath(self.scene, &pose),
                 }
                 .map_err(|e| PlanError::Invalid(format!("pose check: {e}")))
             })
             .collect()
     }
 }
+
+/// Whether the air straight beneath `pose`'s pelvis is clear (at least 1 cm from any
+/// surface) down to the height of its lower knee: a standing body has nothing between its
+/// legs. Marched by the distance, so a thin table top is not stepped over.
+///
+/// # Errors
+/// Errors of `scene`'s distances (a non-finite pose).
+pub fn clear_beneath<S: SignedDistance + ?Sized>(
+    scene: &S,
+    pose: &Pose,
+) -> envfield_scene::Result<bool> {
+    let pelvis = pose.joints[Joint::Pelvis.index()];
+    let knees = pose.joints[Joint::LeftKnee.index()]
+        .z
+        .min(pose.joints[Joint::RightKnee.index()].z);
+    let mut z = pelvis.z;
+    while z >= knees {
+        let d = scene.distance_at(&Point3::new(pelvis.x, pelvis.y, z))?;
+        if d < CLEAR {
+            return Ok(false);
+        }
+        z -= d.max(CLEAR);
+    }
+    Ok(true)
+}
+
+/// How far from any surface [`clear_beneath`] asks the air to be, metres.
+const CLEAR: f32 = 0.01;
 
 /// `p` as a point.
 pub fn point(p: Point3m) -> Point3<f32> {

@@ -78,6 +78,7 @@ fn only_the_search_with_affordance_keeps_every_pose_valid() {
         repeat: true,
         face_the_move: true,
         affordance: Default::default(),
+        clear_beneath: false,
         distances: None,
     };
     let search = FieldSearch3 {

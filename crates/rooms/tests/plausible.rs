@@ -5,7 +5,7 @@
 use envfield_affordance::{
     bones_clear, check_pose, sit_down, standing_pose, AffordanceConfig, Pose, SitConfig, Support,
 };
-use envfield_rooms::{afford, implausible, plausible, RegionConfig};
+use envfield_rooms::{afford, clear_beneath, implausible, plausible, RegionConfig};
 use envfield_scene::nalgebra::{Isometry3, Vector3};
 use envfield_scene::{Furniture, ObjectKind, Primitive, Room, Scene, SceneObject};
 
@@ -119,4 +119,23 @@ fn a_body_seated_on_a_table_top_hangs_its_feet_and_is_implausible() {
         Some(ObjectKind::Table)
     );
     assert!(implausible(&room, [f32::NAN, 0.0, 0.0]).is_err());
+}
+
+#[test]
+fn a_pelvis_over_the_tables_edge_has_the_top_beneath_it() {
+    let room = table_room();
+    // The table's top spans x in [1.4, 2.6]: a pelvis 3 cm inside its edge has the top
+    // straight beneath it, above the knees; 10 cm outside, air down to the knees.
+    let over = placed(standing_pose(), 1.43, 2.0, 0.0);
+    let beside = placed(standing_pose(), 1.30, 2.0, 0.0);
+    assert!(!clear_beneath(&room.scene, &over).unwrap());
+    assert!(clear_beneath(&room.scene, &beside).unwrap());
+    assert_eq!(
+        implausible(&room, over.torso().into()).unwrap(),
+        Some(ObjectKind::Table)
+    );
+    assert_eq!(implausible(&room, beside.torso().into()).unwrap(), None);
+    // In the open room, nothing beneath.
+    let open = placed(standing_pose(), 0.8, 0.8, 0.0);
+    assert!(clear_beneath(&room.scene, &open).unwrap());
 }
