@@ -218,15 +218,15 @@ fn bench_rooms(c: &mut Criterion) {
                 let k = i % n;
                 i += 1;
                 let t = &walks[k];
-                // room_nav's budget: five expansions per step of the shortest walk.
+                // room_nav's budget: 50 expansions per step of the shortest walk.
                 match name {
                     "ours_exact_with_goal" => {
                         let field = ExactField3::at_cell(&region, t.goal).expect("field");
-                        walking.plan(planner, t, Some(&field), 5.0)
+                        walking.plan(planner, t, Some(&field), 50.0)
                     }
                     "ours_raw" => {
                         let field = LearnedField3::new(&net, &region, t.goal).expect("learned");
-                        walking.plan(planner, t, Some(&field), 5.0)
+                        walking.plan(planner, t, Some(&field), 50.0)
                     }
                     _ => {
                         let field: Option<&dyn ContinuousField3> = match planner {
@@ -234,7 +234,7 @@ fn bench_rooms(c: &mut Criterion) {
                             PlannerKind::Ours | PlannerKind::OursNoAff => Some(&tables[k]),
                             _ => None,
                         };
-                        walking.plan(planner, t, field, 5.0)
+                        walking.plan(planner, t, field, 50.0)
                     }
                 }
             })

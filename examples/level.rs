@@ -59,7 +59,7 @@ struct Args {
     #[arg(long, default_value_t = 1.0)]
     rise: f32,
     /// Ours' budget: expansions per step of the shortest walk (plus 200).
-    #[arg(long, default_value_t = 5.0)]
+    #[arg(long, default_value_t = 50.0)]
     budget: f64,
     /// RRT's iterations and PRM's roadmap samples (the paper gives a room 500; a level is
     /// a hundred rooms).

@@ -581,15 +581,17 @@ fn level_walks_up_a_ramp_and_refuses_a_level_of_one_floor() {
         ]
         .map(str::to_owned)
     };
-    let done = Command::new(&level).args(args(&two, "0.6")).output().unwrap();
+    let done = Command::new(&level)
+        .args(args(&two, "0.6"))
+        .output()
+        .unwrap();
     let stdout = String::from_utf8_lossy(&done.stdout);
     assert!(
         done.status.success(),
         "{}",
         String::from_utf8_lossy(&done.stderr)
     );
-    let summary: serde_json::Value =
-        serde_json::from_str(stdout.lines().last().unwrap()).unwrap();
+    let summary: serde_json::Value = serde_json::from_str(stdout.lines().last().unwrap()).unwrap();
     assert_eq!(summary["pairs"], 2, "{summary}");
     assert!(summary["rise_m_mean"].as_f64().unwrap() >= 0.6, "{summary}");
     assert_eq!(summary["ours_exact_reach_pct"], 100.0, "{summary}");
