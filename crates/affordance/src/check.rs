@@ -2,6 +2,7 @@
 //! optimization by affordance").
 
 use envfield_scene::{Scene, SignedDistance};
+use nalgebra::Point3;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -12,8 +13,9 @@ use crate::skeleton::{Joint, Pose, PoseSequence, Support, JOINT_COUNT};
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct AffordanceConfig {
     /// A support joint counts as resting on a surface when its signed distance is at most
-    /// this. Skeleton joints sit inside the body (SMPL's hips and pelvis are 5-10 cm above
-    /// the skin a seat touches), so the default is 0.12.
+    /// this and a surface facing up lies straight beneath it within this (a foot beside a
+    /// box's side does not rest on the box). Skeleton joints sit inside the body (SMPL's hips
+    /// and pelvis are 5-10 cm above the skin a seat touches), so the default is 0.12.
     pub contact_tolerance: f32,
     /// A support joint deeper than this inside geometry is sunk, not supported.
     pub max_penetration: f32,
@@ -106,8 +108,52 @@ pub fn check_pose<S: SignedDistance + ?Sized>(
     for (d, p) in distances.iter_mut().zip(&pose.joints) {
         *d = scene.distance_at(p)?;
     }
-    Ok(report(distances, support, config))
+    let mut resting = [false; JOINT_COUNT];
+    for j in support.joints() {
+        let i = j.index();
+        resting[i] = rests_on(scene, &pose.joints[i], distances[i], config)?;
+    }
+    Ok(report(distances, resting, support, config))
 }
+
+/// Whether a support joint at `p`, its signed distance `d`, rests on a surface: within the
+/// tolerances of one, and that surface lies beneath it. The distance alone cannot say what
+/// the nearest surface is: a foot beside a box touches its side, not its top, and a body
+/// "stands" in the air beside a wall. So the vertical line down from the joint is followed,
+/// by its distance to the nearest surface, for as far as the contact tolerance reaches; a
+/// surface met there holds the joint if the distance grows upwards at it (the surface faces
+/// up within 60 degrees), not if the line only grazes a wall.
+fn rests_on<S: SignedDistance + ?Sized>(
+    scene: &S,
+    p: &Point3<f32>,
+    d: f32,
+    config: &AffordanceConfig,
+) -> Result<bool> {
+    if !config.rests(d) {
+        return Ok(false);
+    }
+    let reach = config.contact_tolerance.max(0.0) + MEETS;
+    let (mut t, mut here) = (0.0f32, d);
+    loop {
+        if here <= MEETS {
+            let at = Point3::new(p.x, p.y, p.z - t);
+            let up = scene.distance_at(&Point3::new(at.x, at.y, at.z + MEETS))?;
+            let down = scene.distance_at(&Point3::new(at.x, at.y, at.z - MEETS))?;
+            if up - down >= MEETS {
+                return Ok(true);
+            }
+        }
+        t += here.max(MEETS);
+        if t > reach {
+            return Ok(false);
+        }
+        here = scene.distance_at(&Point3::new(p.x, p.y, p.z - t))?;
+    }
+}
+
+/// How close the line down from a support joint comes to a surface to meet it, metres; the
+/// slope test at the meeting point looks this far up and down.
+const MEETS: f32 = 0.02;
 
 /// Whether `pose` is supported and collision-free: [`check_pose`]'s
 /// [`AffordanceReport::valid`], stopping at the first joint that decides it. A search asks
@@ -132,7 +178,8 @@ pub fn pose_valid<S: SignedDistance + ?Sized>(
     // One resting joint decides "any suffices"; one that does not rest decides "all".
     let any = support.any_joint_suffices();
     for j in support_joints {
-        if config.rests(scene.distance_at(&pose.joints[j.index()])?) == any {
+        let p = &pose.joints[j.index()];
+        if rests_on(scene, p, scene.distance_at(p)?, config)? == any {
             return Ok(any);
         }
     }
@@ -194,13 +241,14 @@ pub fn bones_clear<S: SignedDistance + ?Sized>(
 
 fn report(
     distances: [f32; JOINT_COUNT],
+    resting: [bool; JOINT_COUNT],
     support: Support,
     config: &AffordanceConfig,
 ) -> AffordanceReport {
     let support_joints = support.joints();
     let supported_joints = support_joints
         .iter()
-        .filter(|j| config.rests(distances[j.index()]))
+        .filter(|j| resting[j.index()])
         .count();
     let colliding_joints = Joint::ALL
         .iter()

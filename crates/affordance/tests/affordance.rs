@@ -373,3 +373,56 @@ fn pose_valid_agrees_with_the_full_report() {
         "{valid} of {total}"
     );
 }
+
+#[test]
+fn a_foot_rests_on_what_lies_beneath_it_not_on_a_side_it_touches() {
+    // No floor: a 1 cm cube, and a wall 2 m tall. A standing body whose foot touches the
+    // cube's side, or the wall, stands on nothing.
+    let mut s = Scene::new();
+    let cube = SceneObject::new("cube", ObjectKind::Other)
+        .with(Primitive::cuboid([0.01, 0.01, 0.01]), at(0.0, 0.0, 0.005))
+        .unwrap();
+    let wall = SceneObject::new("wall", ObjectKind::Wall)
+        .with(Primitive::cuboid([0.1, 1.0, 2.0]), at(3.0, 0.0, 1.0))
+        .unwrap();
+    s.add(cube).unwrap();
+    s.add(wall).unwrap();
+    let pose = standing_pose();
+    let foot = pose.joints[Joint::LeftFoot.index()];
+    // The left foot 4 cm beside the cube's side, level with it.
+    let beside = pose.translated(&Vector3::new(-foot.x + 0.045, -foot.y, 0.005 - foot.z));
+    let r = check_pose(&s, &beside, Support::Standing, &cfg()).unwrap();
+    assert!(r.distances[Joint::LeftFoot.index()] < cfg().contact_tolerance);
+    assert!(!r.supported, "{r:?}");
+    // On the cube's top it stands (a foot on a 1 cm cube: the top is beneath it).
+    let on_top = pose.translated(&Vector3::new(-foot.x, -foot.y, 0.03 - foot.z));
+    assert!(
+        check_pose(&s, &on_top, Support::Standing, &cfg())
+            .unwrap()
+            .supported
+    );
+    // Against the wall, 3 cm from it, no floor: nothing beneath.
+    let at_wall = pose.translated(&Vector3::new(2.92 - foot.x, -foot.y, 1.0 - foot.z));
+    assert!(
+        !check_pose(&s, &at_wall, Support::Standing, &cfg())
+            .unwrap()
+            .supported
+    );
+    // With a floor, a foot 3 cm from the wall stands on it: the line down meets the floor,
+    // the wall beside it does not hide it.
+    let mut s = s;
+    let floor = SceneObject::new("floor", ObjectKind::Floor)
+        .with(Primitive::cuboid([2.0, 2.0, 0.1]), at(2.5, 0.0, -0.05))
+        .unwrap();
+    s.add(floor).unwrap();
+    let by_wall = pose.translated(&Vector3::new(2.92 - foot.x, -foot.y, 0.03 - foot.z));
+    for scene_or_grid in [true, false] {
+        let r = if scene_or_grid {
+            check_pose(&s, &by_wall, Support::Standing, &cfg()).unwrap()
+        } else {
+            let grid = envfield_scene::DistanceGrid::around(&s, 0.2, 0.05).unwrap();
+            check_pose(&grid, &by_wall, Support::Standing, &cfg()).unwrap()
+        };
+        assert!(r.supported, "{r:?}");
+    }
+}
