@@ -446,6 +446,23 @@ fn accessible_refuses_floors_too_large_and_warns_of_thin_samples() {
     );
     let stderr = String::from_utf8_lossy(&done.stderr);
     assert!(stderr.contains("set --samples 96000"), "{stderr}");
+    // Case 4: a 1 cm cube and nothing else. Feet touching its sides used to "stand" there;
+    // a foot rests only on what lies beneath it, so nothing affords a pose, and it says so.
+    let cube = write(
+        &dir,
+        "cube.obj",
+        "v 0 0 0\nv 0.01 0 0\nv 0.01 0.01 0\nv 0 0.01 0\n\
+         v 0 0 0.01\nv 0.01 0 0.01\nv 0.01 0.01 0.01\nv 0 0.01 0.01\n\
+         f 1 3 2\nf 1 4 3\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\n\
+         f 2 3 7\nf 2 7 6\nf 3 4 8\nf 3 8 7\nf 4 1 5\nf 4 5 8\n",
+    );
+    refuses(
+        run(
+            &accessible,
+            &["--scene", &cube, "--no-field", "--out", &out],
+        ),
+        "no torso sample affords a pose",
+    );
     std::fs::remove_dir_all(&dir).ok();
 }
 
