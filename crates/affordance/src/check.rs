@@ -246,10 +246,7 @@ fn report(
     config: &AffordanceConfig,
 ) -> AffordanceReport {
     let support_joints = support.joints();
-    let supported_joints = support_joints
-        .iter()
-        .filter(|j| resting[j.index()])
-        .count();
+    let supported_joints = support_joints.iter().filter(|j| resting[j.index()]).count();
     let colliding_joints = Joint::ALL
         .iter()
         .filter(|j| !support_joints.contains(j))

@@ -5,7 +5,7 @@ use crate::AccessibleRegion;
 use envfield_affordance::{
     check_pose, pose_valid, AffordanceConfig, Joint, Pose, PoseSequence, Support,
 };
-use envfield_grid::{Cell3, Point3m, SplitMix64};
+use envfield_grid::{Point3m, SplitMix64};
 use envfield_plan::space3::{Space3, StepFilter};
 use envfield_plan::PlanError;
 use envfield_scene::nalgebra::{Point3, Vector3};
@@ -21,10 +21,7 @@ impl Space3 for AccessibleRegion {
     fn sample(&self, rng: &mut SplitMix64) -> Point3m {
         let free = self.free_indices();
         let i = free[rng.below(free.len())];
-        let [_, ny, nz] = self.frame.shape;
-        let c = self
-            .frame
-            .center(Cell3::new(i / (ny * nz), (i / nz) % ny, i % nz));
+        let c = self.frame.center(self.grid.cell(i));
         let h = 0.499 * self.frame.voxel;
         let mut j = || (2.0 * rng.next_f32() - 1.0) * h;
         [c.x + j(), c.y + j(), c.z + j()]

@@ -499,15 +499,9 @@ impl AccessibleRegion {
 
     /// The accessible voxels' centres, metres.
     pub fn voxel_centres(&self) -> Vec<[f32; 3]> {
-        let [nx, ny, nz] = self.frame.shape;
-        (0..nx * ny * nz)
-            .filter(|&i| !self.grid.obstacles()[i])
-            .map(|i| {
-                let c = self
-                    .frame
-                    .center(Cell3::new(i / (ny * nz), (i / nz) % ny, i % nz));
-                <[f32; 3]>::from(c)
-            })
+        self.free_indices()
+            .iter()
+            .map(|&i| self.frame.center(self.grid.cell(i)).into())
             .collect()
     }
 
