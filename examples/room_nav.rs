@@ -165,14 +165,23 @@ fn room_field(
             eprintln!("room {seed}: field loaded from {}", f.display());
         }
         let net = FieldNet::load(&f)?;
-        return match net.config() {
-            ModelConfig::Goal(c) if c.extent == region.frame.shape.to_vec() => Ok((net, None)),
-            _ => bail!(
+        let fits =
+            matches!(net.config(), ModelConfig::Goal(c) if c.extent == region.frame.shape.to_vec());
+        if fits {
+            return Ok((net, None));
+        }
+        // A field the user named must fit; the shipped one is trained again when it does not.
+        if args.field.is_some() || cached.as_ref() == Some(&f) {
+            bail!(
                 "{}: this field was trained on another region (the VAE or the room changed); \
                  train it again with --field-steps",
                 f.display()
-            ),
-        };
+            );
+        }
+        eprintln!(
+            "room {seed}: the shipped field {} was trained on another region; training one",
+            f.display()
+        );
     }
     let style = ProgressStyle::with_template("{msg:>24} {bar:30} {pos}/{len} (eta {eta})")?;
     let bar = ProgressBar::new(args.field_steps).with_style(style);

@@ -94,6 +94,11 @@ run 36-16a 60 $BIN/train_birdseye --goals-per-room $huge --out $T/be16.safetenso
 run 36-16b 60 $BIN/train_birdseye --rooms $huge --out $T/be16.safetensors
 run 36-17 60 $BIN/birdseye_multi --room $T/big_room.obj --out $T/be17
 run 36-5 60 $BIN/accessible --scene $T/big_room.obj --no-field --out $T/acc5
+# Case 4: a 1 cm cube alone, and one floating table top (1.2 x 0.8 x 0.04 m, 0.70 m up).
+printf 'v 0 0 0\nv 0.01 0 0\nv 0.01 0.01 0\nv 0 0.01 0\nv 0 0 0.01\nv 0.01 0 0.01\nv 0.01 0.01 0.01\nv 0 0.01 0.01\nf 1 3 2\nf 1 4 3\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\nf 2 3 7\nf 2 7 6\nf 3 4 8\nf 3 8 7\nf 4 1 5\nf 4 5 8\n' > $T/cube.obj
+run 36-4a 120 $BIN/accessible --scene $T/cube.obj --no-field --out $T/acc4a
+printf 'v 0 0 0.7\nv 1.2 0 0.7\nv 0 0.8 0.7\nv 1.2 0.8 0.7\nv 0 0 0.74\nv 1.2 0 0.74\nv 0 0.8 0.74\nv 1.2 0.8 0.74\nf 1 3 4\nf 1 4 2\nf 5 6 8\nf 5 8 7\nf 1 2 6\nf 1 6 5\nf 2 4 8\nf 2 8 6\nf 4 3 7\nf 4 7 8\nf 3 1 5\nf 3 5 7\n' > $T/top.obj
+run 36-4b 120 $BIN/accessible --scene $T/top.obj --no-field --json --out $T/acc4b
 # Recast's levels (scripts/fetch_recast_levels.sh): a region from their surfaces.
 if [ -f data/recast/dungeon.obj ]; then
     run 36-6a 300 $BIN/level --scene data/recast/dungeon.obj --json --out $T/lv6a

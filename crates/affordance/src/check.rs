@@ -121,8 +121,8 @@ pub fn check_pose<S: SignedDistance + ?Sized>(
 /// the nearest surface is: a foot beside a box touches its side, not its top, and a body
 /// "stands" in the air beside a wall. So the vertical line down from the joint is followed,
 /// by its distance to the nearest surface, for as far as the contact tolerance reaches; a
-/// surface met there holds the joint if the distance grows upwards at it (the surface faces
-/// up within 60 degrees), not if the line only grazes a wall.
+/// surface met there holds the joint if the distance grows upwards from it (the surface faces
+/// up within 53 degrees), not if the line only grazes a wall.
 fn rests_on<S: SignedDistance + ?Sized>(
     scene: &S,
     p: &Point3<f32>,
@@ -135,11 +135,11 @@ fn rests_on<S: SignedDistance + ?Sized>(
     let reach = config.contact_tolerance.max(0.0) + MEETS;
     let (mut t, mut here) = (0.0f32, d);
     loop {
+        // Only upwards: below a surface the distance may be unsigned (an open sheet, a
+        // coarse inside), so it need not fall on through the surface.
         if here <= MEETS {
-            let at = Point3::new(p.x, p.y, p.z - t);
-            let up = scene.distance_at(&Point3::new(at.x, at.y, at.z + MEETS))?;
-            let down = scene.distance_at(&Point3::new(at.x, at.y, at.z - MEETS))?;
-            if up - down >= MEETS {
+            let up = scene.distance_at(&Point3::new(p.x, p.y, p.z - t + MEETS))?;
+            if up - here >= FACES_UP * MEETS {
                 return Ok(true);
             }
         }
@@ -152,8 +152,12 @@ fn rests_on<S: SignedDistance + ?Sized>(
 }
 
 /// How close the line down from a support joint comes to a surface to meet it, metres; the
-/// slope test at the meeting point looks this far up and down.
+/// slope test at the meeting point looks this far up.
 const MEETS: f32 = 0.02;
+
+/// The least the distance grows per unit height above a surface met, for the surface to face
+/// up (0.6: within 53 degrees of level).
+const FACES_UP: f32 = 0.6;
 
 /// Whether `pose` is supported and collision-free: [`check_pose`]'s
 /// [`AffordanceReport::valid`], stopping at the first joint that decides it. A search asks

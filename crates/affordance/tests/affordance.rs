@@ -426,3 +426,36 @@ fn a_foot_rests_on_what_lies_beneath_it_not_on_a_side_it_touches() {
         assert!(r.supported, "{r:?}");
     }
 }
+
+#[test]
+fn a_foot_on_an_open_sheet_rests_on_it() {
+    // A floor of one zero-thickness sheet (no inside: its distance is unsigned), as game
+    // levels and scanned rooms often are. A foot on it, or just above it, rests on it.
+    let mesh = envfield_scene::TriangleMesh {
+        vertices: vec![
+            Point3::new(-2.0, -2.0, 0.0),
+            Point3::new(2.0, -2.0, 0.0),
+            Point3::new(2.0, 2.0, 0.0),
+            Point3::new(-2.0, 2.0, 0.0),
+        ],
+        triangles: vec![[0, 1, 2], [0, 2, 3]],
+    };
+    let scene = Scene::from_mesh("sheet", &mesh).unwrap();
+    let pose = standing_pose();
+    let sole = pose
+        .joints
+        .iter()
+        .map(|j| j.z)
+        .fold(f32::INFINITY, f32::min);
+    for lift in [0.0, 0.005, 0.03, 0.1] {
+        let p = pose.translated(&Vector3::new(0.0, 0.0, lift - sole));
+        let r = check_pose(&scene, &p, Support::Standing, &cfg()).unwrap();
+        assert!(r.supported, "{lift} m above the sheet: {r:?}");
+    }
+    let p = pose.translated(&Vector3::new(0.0, 0.0, 0.3 - sole));
+    assert!(
+        !check_pose(&scene, &p, Support::Standing, &cfg())
+            .unwrap()
+            .supported
+    );
+}

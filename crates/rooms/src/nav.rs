@@ -62,7 +62,7 @@ pub struct PoseFilter<'a> {
     pub face_the_move: bool,
     /// The checks' tolerances.
     pub affordance: AffordanceConfig,
-    /// A standing step must have air straight beneath its pelvis down to its knees' height
+    /// A standing step must have air straight beneath its pelvis down to its shins
     /// ([`clear_beneath`]): nothing between the legs. The region's voxels passed the
     /// filter at their centres; a torso elsewhere in a voxel beside a table may stand with
     /// its pelvis over the table's edge, every joint clear.
@@ -193,8 +193,10 @@ impl StepFilter for PoseFilter<'_> {
 }
 
 /// Whether the air straight beneath `pose`'s pelvis is clear (at least 1 cm from any
-/// surface) down to the height of its lower knee: a standing body has nothing between its
-/// legs. Marched by the distance, so a thin table top is not stepped over.
+/// surface) down to halfway between its lower knee and that leg's ankle: a standing body has
+/// nothing between its legs, neither a table's edge nor a chair's or a coffee table's (their
+/// tops, 0.40-0.45 m, lie below the knees). Marched by the distance, so a thin top is not
+/// stepped over.
 ///
 /// # Errors
 /// Errors of `scene`'s distances (a non-finite pose).
@@ -203,11 +205,13 @@ pub fn clear_beneath<S: SignedDistance + ?Sized>(
     pose: &Pose,
 ) -> envfield_scene::Result<bool> {
     let pelvis = pose.joints[Joint::Pelvis.index()];
-    let knees = pose.joints[Joint::LeftKnee.index()]
-        .z
-        .min(pose.joints[Joint::RightKnee.index()].z);
+    let shin = |knee: Joint, ankle: Joint| {
+        0.5 * (pose.joints[knee.index()].z + pose.joints[ankle.index()].z)
+    };
+    let lowest =
+        shin(Joint::LeftKnee, Joint::LeftAnkle).min(shin(Joint::RightKnee, Joint::RightAnkle));
     let mut z = pelvis.z;
-    while z >= knees {
+    while z >= lowest {
         let d = scene.distance_at(&Point3::new(pelvis.x, pelvis.y, z))?;
         if d < CLEAR {
             return Ok(false);

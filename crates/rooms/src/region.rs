@@ -760,8 +760,9 @@ const STANDING_ABOVE: f32 = 0.6;
 /// ([`Room::furniture`]): the kind of the piece it is inside (any furniture but a seat, whose
 /// box holds the torso of whoever sits there), or of the first surface straight below it when
 /// that is furniture people do not sit or lie on (a table, desk, cabinet, shelf or piano), or
-/// a seat it stands on (more than 0.6 m above the surface). `None` when it is plausible: over
-/// the floor, or sitting or lying on a bed, sofa or chair.
+/// a seat it stands on (more than 0.6 m above a surface of the seat at least half its seat
+/// height up; over a chair's legs or base a body stands on the floor). `None` when it is
+/// plausible: over the floor, or sitting or lying on a bed, sofa or chair.
 ///
 /// The affordance figures cannot see this: a body lying on a table is supported and free of
 /// collisions.
@@ -795,10 +796,22 @@ pub fn implausible(room: &Room, p: [f32; 3]) -> Result<Option<ObjectKind>> {
         .cast_ray(&Point3::from(p), &-Vector3::z(), p[2].max(0.0) + 1.0)?;
     Ok(below.and_then(|hit| {
         let kind = room.scene.objects()[hit.object].kind;
-        let wrong = kind.is_furniture() && (!kind.is_seat() || hit.distance > STANDING_ABOVE);
+        // Standing on a seat: high above a surface of it that is at least half the seat's
+        // height up (its seat, arms or back), not above its legs or base beside the feet.
+        let seat_top = room
+            .furniture
+            .iter()
+            .find(|f| f.object == hit.object)
+            .map_or(0.0, |f| f.seat_height.unwrap_or(f.size[2]));
+        let stands_on = hit.distance > STANDING_ABOVE && hit.point.z >= SEAT_PART_SHARE * seat_top;
+        let wrong = kind.is_furniture() && (!kind.is_seat() || stands_on);
         wrong.then_some(kind)
     }))
 }
+
+/// A surface of a seat at least this share of its seat height up counts as one a body could
+/// stand on; lower parts (legs, a base, a stretcher) stand on the floor between the feet.
+const SEAT_PART_SHARE: f32 = 0.5;
 
 /// Uniform samples in the room's box (interior, floor to wall top): the no-learning control.
 pub fn uniform_in_room(room: &Room, height: f32, n: usize, seed: u64) -> Vec<[f32; 3]> {

@@ -139,3 +139,46 @@ fn a_pelvis_over_the_tables_edge_has_the_top_beneath_it() {
     let open = placed(standing_pose(), 0.8, 0.8, 0.0);
     assert!(clear_beneath(&room.scene, &open).unwrap());
 }
+
+#[test]
+fn over_a_chairs_base_a_body_stands_on_the_floor_and_on_its_seat_it_stands_on_a_seat() {
+    let at = |x: f32, y: f32, z: f32| Isometry3::translation(x, y, z);
+    let mut scene = Scene::new();
+    let floor = SceneObject::new("floor", ObjectKind::Floor)
+        .with(Primitive::cuboid([4.0, 4.0, 0.1]), at(2.0, 2.0, -0.05))
+        .unwrap();
+    scene.add(floor).unwrap();
+    // An office chair: a wide base 3 cm high, a column, a 0.45 m seat 0.5 m square.
+    let chair = SceneObject::new("chair", ObjectKind::Chair)
+        .with(Primitive::cuboid([0.7, 0.7, 0.03]), at(2.0, 2.0, 0.015))
+        .unwrap()
+        .with(Primitive::cuboid([0.05, 0.05, 0.4]), at(2.0, 2.0, 0.23))
+        .unwrap()
+        .with(Primitive::cuboid([0.5, 0.5, 0.05]), at(2.0, 2.0, 0.425))
+        .unwrap();
+    let object = scene.add(chair).unwrap();
+    let room = Room {
+        scene,
+        size: [4.0, 4.0],
+        furniture: vec![Furniture {
+            kind: ObjectKind::Chair,
+            object,
+            center: [2.0, 2.0],
+            yaw: 0.0,
+            size: [0.7, 0.7, 0.45],
+            seat_height: Some(0.45),
+            seat_forward: None,
+        }],
+    };
+    // A standing torso over the base's rim, beside the seat: the base lies between the feet.
+    let beside = placed(standing_pose(), 2.31, 2.0, 0.0);
+    assert_eq!(implausible(&room, beside.torso().into()).unwrap(), None);
+    // Standing on the seat is standing on a seat.
+    let on_seat = placed(standing_pose(), 2.0, 2.0, 0.45);
+    assert_eq!(
+        implausible(&room, on_seat.torso().into()).unwrap(),
+        Some(ObjectKind::Chair)
+    );
+    // Seated on it is what a chair is for.
+    assert_eq!(implausible(&room, [2.0, 2.0, 0.55]).unwrap(), None);
+}
