@@ -149,6 +149,14 @@ impl Pose {
         self.joint(Joint::Pelvis)
     }
 
+    /// The height of its lowest joint: for a standing pose, the soles' level.
+    pub fn lowest(&self) -> f32 {
+        self.joints
+            .iter()
+            .map(|j| j.z)
+            .fold(f32::INFINITY, f32::min)
+    }
+
     /// The horizontal direction the body faces: perpendicular to the hip axis, pointing forward
     /// (for a body facing +x the left hip is at +y).
     pub fn facing(&self) -> Vector3<f32> {

@@ -442,11 +442,7 @@ fn a_foot_on_an_open_sheet_rests_on_it() {
     };
     let scene = Scene::from_mesh("sheet", &mesh).unwrap();
     let pose = standing_pose();
-    let sole = pose
-        .joints
-        .iter()
-        .map(|j| j.z)
-        .fold(f32::INFINITY, f32::min);
+    let sole = pose.lowest();
     for lift in [0.0, 0.005, 0.03, 0.1] {
         let p = pose.translated(&Vector3::new(0.0, 0.0, lift - sole));
         let r = check_pose(&scene, &p, Support::Standing, &cfg()).unwrap();

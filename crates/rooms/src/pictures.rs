@@ -29,7 +29,7 @@ pub fn planner_colour(planner: PlannerKind) -> [u8; 3] {
 /// A top view, 6 pixels a voxel: accessible columns light, the rest dark, every planner's
 /// path in its colour, the first path's start green and goal magenta.
 pub fn top_view(region: &AccessibleRegion, paths: &[(PlannerKind, Vec<Point3m>)]) -> Canvas {
-    plan_view(region, 6, paths, |_| [225, 232, 220])
+    plan_view(region, 6, paths, Ends::First, |_| [225, 232, 220])
 }
 
 /// A top view for a scene of several levels, `scale` pixels a voxel: each accessible column
@@ -49,24 +49,9 @@ pub fn height_view(
             (lo.min(i % nz), hi.max(i % nz))
         });
     let span = hi.saturating_sub(lo).max(1) as f32;
-    let mut img = plan_view(region, scale.max(1), &[], |z| {
+    plan_view(region, scale.max(1), paths, Ends::Every, |z| {
         height_colour(z.saturating_sub(lo) as f32 / span)
-    });
-    let to_px = pixel_of(region, scale.max(1));
-    for (planner, pts) in paths {
-        let c = planner_colour(*planner);
-        for w in pts.windows(2) {
-            img.segment(to_px(w[0]), to_px(w[1]), 1, c);
-        }
-    }
-    for (_, pts) in paths {
-        if let (Some(&a), Some(&b)) = (pts.first(), pts.last()) {
-            let (a, b) = (to_px(a), to_px(b));
-            img.dot(a.0, a.1, 3, [30, 200, 30]);
-            img.dot(b.0, b.1, 3, [220, 30, 220]);
-        }
-    }
-    img
+    })
 }
 
 /// A height from 0 (low) to 1 (high) as a colour from dark blue through teal and green to
@@ -95,12 +80,23 @@ fn pixel_of(region: &AccessibleRegion, scale: u32) -> impl Fn(Point3m) -> (f32, 
     }
 }
 
+/// Which paths' starts and goals a plan view marks.
+#[derive(Clone, Copy, PartialEq)]
+enum Ends {
+    /// The first path's (every planner's path of one pair).
+    First,
+    /// Every path's (one planner's paths of many pairs).
+    Every,
+}
+
 /// The region from above, `s` pixels a voxel, each accessible column in `colour` of its
-/// highest accessible voxel's index; the first path's start and goal marked.
+/// highest accessible voxel's index, every path in its planner's colour, starts green and
+/// goals magenta as `ends` says.
 fn plan_view(
     region: &AccessibleRegion,
     s: u32,
     paths: &[(PlannerKind, Vec<Point3m>)],
+    ends: Ends,
     colour: impl Fn(usize) -> [u8; 3],
 ) -> Canvas {
     let [nx, ny, nz] = region.frame.shape;
@@ -123,11 +119,15 @@ fn plan_view(
             img.segment(to_px(w[0]), to_px(w[1]), 1, c);
         }
     }
-    if let Some((_, pts)) = paths.first() {
+    let (marked, dot) = match ends {
+        Ends::First => (paths.len().min(1), 4),
+        Ends::Every => (paths.len(), 3),
+    };
+    for (_, pts) in &paths[..marked] {
         if let (Some(&a), Some(&b)) = (pts.first(), pts.last()) {
             let (a, b) = (to_px(a), to_px(b));
-            img.dot(a.0, a.1, 4, [30, 200, 30]);
-            img.dot(b.0, b.1, 4, [220, 30, 220]);
+            img.dot(a.0, a.1, dot, [30, 200, 30]);
+            img.dot(b.0, b.1, dot, [220, 30, 220]);
         }
     }
     img

@@ -55,12 +55,7 @@ pub fn standing_torsos(scene: &Scene, spacing: f32) -> Result<Vec<[f32; 3]>> {
     }
     // The torso's height over the surface the standing pose's feet rest on.
     let pose = standing_pose();
-    let sole = pose
-        .joints
-        .iter()
-        .map(|j| j.z)
-        .fold(f32::INFINITY, f32::min);
-    let torso_up = pose.torso().z - sole;
+    let torso_up = pose.torso().z - pose.lowest();
     let top = hi.z + 0.1;
     let range = hi.z - lo.z + 0.2;
     let down = Vector3::new(0.0, 0.0, -1.0);

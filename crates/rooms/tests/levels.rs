@@ -46,12 +46,7 @@ fn the_standing_region_joins_two_floors_by_their_ramp_and_ours_climbs_it() {
     let scene = two_floors();
     // The torso's height over the surface the standing pose's soles rest on.
     let pose = standing_pose();
-    let sole = pose
-        .joints
-        .iter()
-        .map(|j| j.z)
-        .fold(f32::INFINITY, f32::min);
-    let up = pose.torso().z - sole;
+    let up = pose.torso().z - pose.lowest();
     let torsos = standing_torsos(&scene, 0.1).unwrap();
     // Each column over the floor alone carries one torso; over the platform, its top and the
     // floor beneath it (inside the platform: the filter drops it).

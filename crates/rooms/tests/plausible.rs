@@ -47,12 +47,7 @@ fn table_room() -> Room {
 /// `pose` moved so its torso is at `(x, y)` and its lowest joint at height `low`.
 fn placed(pose: Pose, x: f32, y: f32, low: f32) -> Pose {
     let t = pose.torso();
-    let bottom = pose
-        .joints
-        .iter()
-        .map(|j| j.z)
-        .fold(f32::INFINITY, f32::min);
-    pose.translated(&Vector3::new(x - t.x, y - t.y, low - bottom))
+    pose.translated(&Vector3::new(x - t.x, y - t.y, low - pose.lowest()))
 }
 
 #[test]
