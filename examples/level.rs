@@ -131,6 +131,13 @@ fn main() -> Result<()> {
     let region = AccessibleRegion::from_drawn(&scene, &torsos, &config.in_place())?;
     let region_s = torsos_s + t.elapsed().as_secs_f64();
     let voxels = region.grid.free_count();
+    // The kept torsos inside the region: the standing places the pairs are drawn from.
+    let standing: Vec<[f32; 3]> = region
+        .samples
+        .iter()
+        .copied()
+        .filter(|s| region.contains(*s))
+        .collect();
     let centres = region.voxel_centres();
     let (zlo, zhi) = centres
         .iter()
@@ -145,13 +152,7 @@ fn main() -> Result<()> {
         region.samples.len(),
         config.voxel,
         // One voxel a column: a standing torso spans one or two voxels in height.
-        region
-            .samples
-            .iter()
-            .filter(|s| region.contains(**s))
-            .count() as f32
-            * config.voxel
-            * config.voxel,
+        standing.len() as f32 * config.voxel * config.voxel,
         region.components,
         region_s
     );
@@ -159,12 +160,6 @@ fn main() -> Result<()> {
 
     // Pairs: goals at standing places, starts at least --rise above or below them.
     let gait = walk(&WalkConfig::default(), args.seed)?;
-    let standing: Vec<[f32; 3]> = region
-        .samples
-        .iter()
-        .copied()
-        .filter(|s| region.contains(*s))
-        .collect();
     let stands = |p: [f32; 3]| {
         afford(&scene, p, &RegionConfig::default())
             .is_ok_and(|a| a.valid == Some(Support::Standing))

@@ -9,14 +9,37 @@ use envfield_rooms::{afford, clear_beneath, implausible, plausible, RegionConfig
 use envfield_scene::nalgebra::{Isometry3, Vector3};
 use envfield_scene::{Furniture, ObjectKind, Primitive, Room, Scene, SceneObject};
 
-/// A 4 x 4 m floor and a 1.2 x 0.8 m table, its 4 cm top at 0.70-0.74 m, centred at (2, 2).
-fn table_room() -> Room {
-    let at = |x: f32, y: f32, z: f32| Isometry3::translation(x, y, z);
+fn at(x: f32, y: f32, z: f32) -> Isometry3<f32> {
+    Isometry3::translation(x, y, z)
+}
+
+/// A 4 x 4 m floor and one piece of furniture, `piece`, known to the room as a box of `size`
+/// centred at (2, 2).
+fn room_with(piece: SceneObject, size: [f32; 3], seat_height: Option<f32>) -> Room {
     let mut scene = Scene::new();
     let floor = SceneObject::new("floor", ObjectKind::Floor)
         .with(Primitive::cuboid([4.0, 4.0, 0.1]), at(2.0, 2.0, -0.05))
         .unwrap();
     scene.add(floor).unwrap();
+    let kind = piece.kind;
+    let object = scene.add(piece).unwrap();
+    Room {
+        scene,
+        size: [4.0, 4.0],
+        furniture: vec![Furniture {
+            kind,
+            object,
+            center: [2.0, 2.0],
+            yaw: 0.0,
+            size,
+            seat_height,
+            seat_forward: None,
+        }],
+    }
+}
+
+/// A 1.2 x 0.8 m table, its 4 cm top at 0.70-0.74 m, centred at (2, 2), on a 4 x 4 m floor.
+fn table_room() -> Room {
     let mut table = SceneObject::new("table", ObjectKind::Table)
         .with(Primitive::cuboid([1.2, 0.8, 0.04]), at(2.0, 2.0, 0.72))
         .unwrap();
@@ -28,20 +51,7 @@ fn table_room() -> Room {
             )
             .unwrap();
     }
-    let object = scene.add(table).unwrap();
-    Room {
-        scene,
-        size: [4.0, 4.0],
-        furniture: vec![Furniture {
-            kind: ObjectKind::Table,
-            object,
-            center: [2.0, 2.0],
-            yaw: 0.0,
-            size: [1.2, 0.8, 0.74],
-            seat_height: None,
-            seat_forward: None,
-        }],
-    }
+    room_with(table, [1.2, 0.8, 0.74], None)
 }
 
 /// `pose` moved so its torso is at `(x, y)` and its lowest joint at height `low`.
@@ -137,12 +147,6 @@ fn a_pelvis_over_the_tables_edge_has_the_top_beneath_it() {
 
 #[test]
 fn over_a_chairs_base_a_body_stands_on_the_floor_and_on_its_seat_it_stands_on_a_seat() {
-    let at = |x: f32, y: f32, z: f32| Isometry3::translation(x, y, z);
-    let mut scene = Scene::new();
-    let floor = SceneObject::new("floor", ObjectKind::Floor)
-        .with(Primitive::cuboid([4.0, 4.0, 0.1]), at(2.0, 2.0, -0.05))
-        .unwrap();
-    scene.add(floor).unwrap();
     // An office chair: a wide base 3 cm high, a column, a 0.45 m seat 0.5 m square.
     let chair = SceneObject::new("chair", ObjectKind::Chair)
         .with(Primitive::cuboid([0.7, 0.7, 0.03]), at(2.0, 2.0, 0.015))
@@ -151,20 +155,7 @@ fn over_a_chairs_base_a_body_stands_on_the_floor_and_on_its_seat_it_stands_on_a_
         .unwrap()
         .with(Primitive::cuboid([0.5, 0.5, 0.05]), at(2.0, 2.0, 0.425))
         .unwrap();
-    let object = scene.add(chair).unwrap();
-    let room = Room {
-        scene,
-        size: [4.0, 4.0],
-        furniture: vec![Furniture {
-            kind: ObjectKind::Chair,
-            object,
-            center: [2.0, 2.0],
-            yaw: 0.0,
-            size: [0.7, 0.7, 0.45],
-            seat_height: Some(0.45),
-            seat_forward: None,
-        }],
-    };
+    let room = room_with(chair, [0.7, 0.7, 0.45], Some(0.45));
     // A standing torso over the base's rim, beside the seat: the base lies between the feet.
     let beside = placed(standing_pose(), 2.31, 2.0, 0.0);
     assert_eq!(implausible(&room, beside.torso().into()).unwrap(), None);
