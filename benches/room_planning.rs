@@ -1,7 +1,7 @@
 //! The room planners' costs in one criterion run, split as a navigation mesh splits them, on
 //! generated room 10000 (never seen by the VAE) with the region the shipped VAE gives it:
 //!
-//! - per room: the scene's distance grid that ours' pose checks read, and the navigation
+//! - per room: the scene's distance grid and surface columns that ours' pose checks read, and the navigation
 //!   mesh's build (Recast's pipeline in Rust and Polyanya's import);
 //! - per goal: the exact field's fast marching, and the learned field's one batched pass over
 //!   the region;
@@ -29,8 +29,12 @@ use envfield::plan::space3::SamplingConfig;
 use envfield::rooms::harness::{
     pairs, standing_places, FloorPlanner, Pair, PairKind, PairSetup, PlannerKind, RoomContext,
 };
-use envfield::rooms::{sample_region, AccessibleRegion, ExactField3, LearnedField3};
-use envfield::scene::{generate_room, DistanceGrid, Room, RoomConfig};
+use envfield::rooms::{
+    sample_region, AccessibleRegion, ExactField3, LearnedField3, SceneTables, BENEATH_CELL,
+    DISTANCE_CELL,
+};
+use envfield::scene::{generate_room, Room, RoomConfig};
+use envfield::scene::{DistanceGrid, SurfaceColumns};
 use envfield::vae::Cvae;
 use navmesh::{Navmesh, NavmeshConfig};
 use std::hint::black_box;
@@ -105,7 +109,7 @@ fn sitting_pairs(room: &Room, region: &AccessibleRegion, seed: u64) -> Vec<Timed
 struct Shared<'a> {
     room: &'a Room,
     region: &'a AccessibleRegion,
-    distances: &'a DistanceGrid,
+    tables: &'a SceneTables,
     navmesh: &'a dyn FloorPlanner,
 }
 
@@ -122,7 +126,7 @@ impl Shared<'_> {
         let mut setup = PairSetup::new(
             &self.room.scene,
             self.region,
-            Some(self.distances),
+            Some(self.tables),
             &t.pair,
             t.shortest,
             budget,
@@ -147,7 +151,7 @@ fn bench_rooms(c: &mut Criterion) {
     // The region exactly as room_nav makes it.
     let region = sample_region(&vae, &room.scene, 6000, seed).expect("region");
     let walks = walking_pairs(&room, &region, seed);
-    let (distances, _) = RoomContext::distances(&room.scene).expect("distances");
+    let (scene_tables, _) = RoomContext::tables(&room.scene).expect("tables");
     let config = NavmeshConfig::for_gait(&walks[0].pair.sequence);
     let navmesh = Navmesh::build(&room.scene, &config).expect("navmesh");
     eprintln!(
@@ -161,7 +165,12 @@ fn bench_rooms(c: &mut Criterion) {
     let mut group = c.benchmark_group("room_planning");
     group.sample_size(10);
     group.bench_function("room/distance_grid", |b| {
-        b.iter(|| black_box(RoomContext::distances(&room.scene).expect("grid")))
+        b.iter(|| black_box(DistanceGrid::around(&room.scene, 0.2, DISTANCE_CELL).expect("grid")))
+    });
+    group.bench_function("room/surface_columns", |b| {
+        b.iter(|| {
+            black_box(SurfaceColumns::around(&room.scene, 0.2, BENEATH_CELL).expect("columns"))
+        })
     });
     group.bench_function("room/navmesh_build", |b| {
         b.iter(|| black_box(Navmesh::build(&room.scene, &config).expect("navmesh")))
@@ -196,7 +205,7 @@ fn bench_rooms(c: &mut Criterion) {
     let walking = Shared {
         room: &room,
         region: &region,
-        distances: &distances,
+        tables: &scene_tables,
         navmesh: &navmesh,
     };
     let rows = [

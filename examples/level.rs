@@ -209,14 +209,7 @@ fn main() -> Result<()> {
         );
     }
 
-    let room = RoomContext {
-        scene: &scene,
-        region: &region,
-        net: None,
-        distances: None,
-        distances_s: 0.0,
-        navmesh: None,
-    };
+    let room = RoomContext::bare(&scene, &region);
     let mut tally = Tally::default();
     // Ours' path of every pair, and every planner's of the first.
     let mut drawn = Vec::new();

@@ -2,11 +2,11 @@
 //! `ours_exact`): the pose-dependent search on the learned (or exact) 3D field under the pose
 //! filter, the region alone where the poses allow no route within `--budget`, then straight
 //! cuts the filter allows; its field is made once per goal and its checks read the scene's
-//! distances sampled once per room. `ours_raw` is the paper's search alone, `ours_noaff` ours
-//! under the region alone; RRT, RRT*, PRM and the line share the region and collision test;
-//! `navmesh` is a navigation mesh of the floor (Recast in Rust) queried by Polyanya. Every
-//! path wears the same pose sequence, checked against the scene. Times are split per path
-//! (`<planner>_s`), per goal (`_goal_s`) and per room (`_room_s`).
+//! distances and surface columns sampled once per room. `ours_raw` is the paper's search
+//! alone, `ours_noaff` ours under the region alone; RRT, RRT*, PRM and the line share the
+//! region and collision test; `navmesh` is a navigation mesh of the floor (Recast in Rust)
+//! queried by Polyanya. Every path wears the same pose sequence, checked against the scene.
+//! Times are split per path (`<planner>_s`), per goal (`_goal_s`) and per room (`_room_s`).
 //!
 //! ```text
 //! cargo run --release --example room_nav                              # the shipped room, a few pairs
@@ -273,7 +273,7 @@ fn main() -> Result<()> {
         region_s.push(t.elapsed().as_secs_f64());
         let (net, trained_s) = room_field(&args, k, seed, &region)?;
         field_s.extend(trained_s);
-        let (distances, distances_s) = RoomContext::distances(&scene)?;
+        let (tables, tables_s) = RoomContext::tables(&scene)?;
         let mesh = Navmesh::for_room(&scene, &walk(&WalkConfig::default(), seed)?, seed);
         let room_planners: Vec<PlannerKind> = planners
             .into_iter()
@@ -283,8 +283,8 @@ fn main() -> Result<()> {
             scene: &scene,
             region: &region,
             net: Some(&net),
-            distances: Some(&distances),
-            distances_s,
+            tables: Some(&tables),
+            tables_s,
             navmesh: mesh.as_ref().map(|m| (m as &dyn FloorPlanner, m.build_s)),
         };
         memory.push(room.bytes());

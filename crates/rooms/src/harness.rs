@@ -7,6 +7,7 @@
 //! build), once per goal (the exact field's fast marching, the learned field's one batched
 //! pass over the region), and per path (the search, whose steps are lookups).
 
+use crate::SceneTables;
 use crate::{afford, point, sit_on, AccessibleRegion, ExactField3, PoseFilter, RegionConfig};
 use crate::{LearnedField3, Result, RoomsError};
 use envfield_affordance::{
@@ -18,7 +19,7 @@ use envfield_plan::space3::{
     prm, rrt, rrt_star, straight_line, FieldSearch3, Path3, SamplingConfig, StepFilter,
 };
 use envfield_scene::nalgebra::Point3;
-use envfield_scene::{DistanceGrid, Room, Scene};
+use envfield_scene::{Room, Scene};
 use std::fmt;
 use std::str::FromStr;
 use std::time::Instant;
@@ -128,7 +129,7 @@ impl PlannerKind {
                 // The paper's search: its poses checked against the scene itself for support
                 // and collisions only, no cap on the checks.
                 let exact = PoseFilter {
-                    distances: None,
+                    tables: None,
                     clear_beneath: false,
                     ..*poses
                 };
@@ -479,7 +480,7 @@ pub struct RunSettings {
 }
 
 /// What a room gives every planner, made once before any goal: the scene, the accessible
-/// region, the learned field's network, the scene's distances that ours' pose checks read, and
+/// region, the learned field's network, the scene's tables that ours' pose checks read, and
 /// a navigation mesh if the caller built one, with the seconds each took.
 pub struct RoomContext<'a> {
     /// The scene.
@@ -490,41 +491,54 @@ pub struct RoomContext<'a> {
     /// The room's learned 3D field; without one the planners that descend it cannot run (a
     /// scene no field was trained for).
     pub net: Option<&'a FieldNet>,
-    /// The scene's signed distances sampled at [`DISTANCE_CELL`] ([`RoomContext::distances`]);
-    /// without them ours' checks ask the scene itself (a scene too large to sample).
-    pub distances: Option<&'a DistanceGrid>,
-    /// Seconds the distance grid took.
-    pub distances_s: f64,
+    /// The scene sampled for ours' pose checks ([`RoomContext::tables`]); without them ours'
+    /// checks ask the scene itself (a scene too large to sample).
+    pub tables: Option<&'a SceneTables>,
+    /// Seconds the tables took.
+    pub tables_s: f64,
     /// A navigation mesh of the scene and the seconds its build took.
     pub navmesh: Option<(&'a dyn FloorPlanner, f64)>,
 }
 
-/// The spacing of the distance grid ours' pose checks read, metres: fine enough that a check
-/// on it agrees with the scene's own on nearly every pose (the tables score every path's
-/// poses against the scene itself).
-pub const DISTANCE_CELL: f32 = 0.03;
+impl<'a> RoomContext<'a> {
+    /// A scene and its region alone: no learned field, no tables (ours' checks ask the
+    /// scene), no navigation mesh. A game level too large to sample is run this way.
+    pub fn bare(scene: &'a Scene, region: &'a AccessibleRegion) -> Self {
+        Self {
+            scene,
+            region,
+            net: None,
+            tables: None,
+            tables_s: 0.0,
+            navmesh: None,
+        }
+    }
 
-impl RoomContext<'_> {
-    /// The distance grid of `scene` for ours' checks: its bounding box grown by 0.2 m, at
-    /// [`DISTANCE_CELL`], with the seconds it took.
+    /// The tables of `scene` for ours' checks ([`SceneTables::of`]), with the seconds they
+    /// took.
     ///
     /// # Errors
-    /// Errors of [`DistanceGrid::around`] (an empty scene).
-    pub fn distances(scene: &Scene) -> Result<(DistanceGrid, f64)> {
+    /// Errors of [`SceneTables::of`] (an empty scene).
+    pub fn tables(scene: &Scene) -> Result<(SceneTables, f64)> {
         let t = Instant::now();
-        let grid = DistanceGrid::around(scene, 0.2, DISTANCE_CELL)?;
-        Ok((grid, t.elapsed().as_secs_f64()))
+        let tables = SceneTables::of(scene)?;
+        Ok((tables, t.elapsed().as_secs_f64()))
     }
 
     /// The bytes ours and the navigation mesh keep for the room, by name: `region_bytes` (a
-    /// byte a voxel), `distances_bytes` (the distance grid), `field_per_goal_bytes` (one
-    /// goal's field table, an f32 a voxel) and `navmesh_bytes` (0 without one).
-    pub fn bytes(&self) -> [(&'static str, usize); 4] {
+    /// byte a voxel), `distances_bytes` (the distance grid), `beneath_bytes` (the surface
+    /// columns), `field_per_goal_bytes` (one goal's field table, an f32 a voxel) and
+    /// `navmesh_bytes` (0 without one).
+    pub fn bytes(&self) -> [(&'static str, usize); 5] {
         [
             ("region_bytes", self.region.grid.len()),
             (
                 "distances_bytes",
-                self.distances.map_or(0, DistanceGrid::bytes),
+                self.tables.map_or(0, |t| t.distances.bytes()),
+            ),
+            (
+                "beneath_bytes",
+                self.tables.map_or(0, |t| t.beneath.bytes()),
             ),
             ("field_per_goal_bytes", 4 * self.region.grid.len()),
             ("navmesh_bytes", self.navmesh.map_or(0, |(m, _)| m.bytes())),
@@ -534,7 +548,7 @@ impl RoomContext<'_> {
     /// The seconds `planner` spent on the room before any goal.
     pub fn room_seconds(&self, planner: PlannerKind) -> f64 {
         match planner {
-            PlannerKind::Ours | PlannerKind::OursExact => self.distances_s,
+            PlannerKind::Ours | PlannerKind::OursExact => self.tables_s,
             PlannerKind::Navmesh => self.navmesh.map_or(0.0, |(_, s)| s),
             _ => 0.0,
         }
@@ -544,13 +558,13 @@ impl RoomContext<'_> {
 impl<'a> PairSetup<'a> {
     /// The setup of `pair` in the room: ours' budget is `budget` expansions per step of the
     /// `shortest` walk (metres) plus 200, the samplers step at the walk's step (at least
-    /// 5 cm), seeded by `seed`. Ours' pose checks read `distances` when given (the scene's
+    /// 5 cm), seeded by `seed`. Ours' pose checks read `tables` when given (the scene
     /// otherwise).
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         scene: &'a Scene,
         region: &'a AccessibleRegion,
-        distances: Option<&'a DistanceGrid>,
+        tables: Option<&'a SceneTables>,
         pair: &'a Pair,
         shortest: f64,
         budget: f64,
@@ -569,7 +583,7 @@ impl<'a> PairSetup<'a> {
                 face_the_move: pair.repeat,
                 affordance: Default::default(),
                 clear_beneath: true,
-                distances,
+                tables,
             },
             search: {
                 // A search that has not arrived by then is lost in a pocket the poses cannot
@@ -632,7 +646,7 @@ pub fn run_pair(
     let mut setup = PairSetup::new(
         room.scene,
         region,
-        room.distances,
+        room.tables,
         pair,
         shortest,
         settings.budget,

@@ -59,7 +59,7 @@ pub use draw::{
 pub use error::{Result, RoomsError};
 pub use field3::{ExactField3, LearnedField3, VoxelField3};
 pub use field3_train::{train_field3, Field3Config, Field3Report};
-pub use nav::{clear_beneath, offset, point, PoseFilter};
+pub use nav::{clear_beneath, offset, point, PoseFilter, SceneTables, BENEATH_CELL, DISTANCE_CELL};
 pub use region::{
     afford, afford_all, covered_pct, drawn_summary, implausible, plausible, region_quality,
     uniform_in_room, AccessibleRegion, Afford, RegionConfig, RegionQuality,

@@ -9,7 +9,7 @@ use envfield_grid::{Point3m, SplitMix64};
 use envfield_plan::space3::{Space3, StepFilter};
 use envfield_plan::PlanError;
 use envfield_scene::nalgebra::{Point3, Vector3};
-use envfield_scene::{DistanceGrid, Scene, SignedDistance};
+use envfield_scene::{DistanceGrid, Scene, SurfaceColumns, SurfacesBeneath};
 
 /// The region's free space: a torso is allowed in an accessible voxel. Samples are uniform
 /// over the accessible voxels, each jittered within its voxel.
@@ -62,16 +62,16 @@ pub struct PoseFilter<'a> {
     pub face_the_move: bool,
     /// The checks' tolerances.
     pub affordance: AffordanceConfig,
-    /// A standing step must have air straight beneath its pelvis down to its shins
-    /// ([`clear_beneath`]): nothing between the legs. The region's voxels passed the
+    /// A standing step must have no surface straight beneath its pelvis above its higher
+    /// foot ([`clear_beneath`]): nothing between the legs. The region's voxels passed the
     /// filter at their centres; a torso elsewhere in a voxel beside a table may stand with
     /// its pelvis over the table's edge, every joint clear.
     pub clear_beneath: bool,
-    /// The scene's distances sampled once per room: when set, the search's checks
-    /// ([`StepFilter::keep`]) read them instead of the scene, a few lookups per joint instead
-    /// of a pass over the scene's parts. [`PoseFilter::poses_along`], which scores a path,
-    /// always checks against the scene itself.
-    pub distances: Option<&'a DistanceGrid>,
+    /// The scene sampled once per room: when set, the search's checks ([`StepFilter::keep`])
+    /// read it instead of the scene, a few lookups per joint instead of a pass over the
+    /// scene's parts. [`PoseFilter::poses_along`], which scores a path, always checks against
+    /// the scene itself.
+    pub tables: Option<&'a SceneTables>,
 }
 
 impl PoseFilter<'_> {
@@ -174,16 +174,16 @@ impl StepFilter for PoseFilter<'_> {
                     return Ok(false);
                 }
                 let pose = self.placed(step, from, c);
-                let valid = match self.distances {
-                    Some(grid) => pose_valid(grid, &pose, support, &self.affordance),
+                let valid = match self.tables {
+                    Some(t) => pose_valid(&t.distances, &pose, support, &self.affordance),
                     None => pose_valid(self.scene, &pose, support, &self.affordance),
                 }
                 .map_err(|e| PlanError::Invalid(format!("pose check: {e}")))?;
                 if !(valid && self.clear_beneath && support == Support::Standing) {
                     return Ok(valid);
                 }
-                match self.distances {
-                    Some(grid) => clear_beneath(grid, &pose),
+                match self.tables {
+                    Some(t) => clear_beneath(&t.beneath, &pose),
                     None => clear_beneath(self.scene, &pose),
                 }
                 .map_err(|e| PlanError::Invalid(format!("pose check: {e}")))
@@ -192,37 +192,71 @@ impl StepFilter for PoseFilter<'_> {
     }
 }
 
-/// Whether the air straight beneath `pose`'s pelvis is clear (at least 1 cm from any
-/// surface) down to halfway between its lower knee and that leg's ankle: a standing body has
-/// nothing between its legs, neither a table's edge nor a chair's or a coffee table's (their
-/// tops, 0.40-0.45 m, lie below the knees). Marched by the distance, so a thin top is not
-/// stepped over.
+/// Whether no surface lies straight beneath `pose`'s pelvis down to 5 cm above the sole of
+/// its higher foot: what a standing body has between its legs is no higher than what its feet
+/// stand on, neither a table's edge nor a chair's seat or crossbar. On a stair the tread
+/// beneath the pelvis lies at or below the higher foot's, so climbing stays clear. Asked of
+/// the scene, the answer is one exact ray; of [`SurfaceColumns`], a surface within one of its
+/// cells (horizontally) counts.
 ///
 /// # Errors
-/// Errors of `scene`'s distances (a non-finite pose).
-pub fn clear_beneath<S: SignedDistance + ?Sized>(
-    scene: &S,
+/// Errors of `beneath` (a non-finite pose).
+pub fn clear_beneath<B: SurfacesBeneath + ?Sized>(
+    beneath: &B,
     pose: &Pose,
 ) -> envfield_scene::Result<bool> {
     let pelvis = pose.joints[Joint::Pelvis.index()];
-    let shin = |knee: Joint, ankle: Joint| {
-        0.5 * (pose.joints[knee.index()].z + pose.joints[ankle.index()].z)
+    let sole = |ankle: Joint, foot: Joint| {
+        pose.joints[ankle.index()]
+            .z
+            .min(pose.joints[foot.index()].z)
     };
-    let lowest =
-        shin(Joint::LeftKnee, Joint::LeftAnkle).min(shin(Joint::RightKnee, Joint::RightAnkle));
-    let mut z = pelvis.z;
-    while z >= lowest {
-        let d = scene.distance_at(&Point3::new(pelvis.x, pelvis.y, z))?;
-        if d < CLEAR {
-            return Ok(false);
-        }
-        z -= d.max(CLEAR);
-    }
-    Ok(true)
+    let higher =
+        sole(Joint::LeftAnkle, Joint::LeftFoot).max(sole(Joint::RightAnkle, Joint::RightFoot));
+    Ok(!beneath.any_between(pelvis.x, pelvis.y, higher + ABOVE_SOLE, pelvis.z)?)
 }
 
-/// How far from any surface [`clear_beneath`] asks the air to be, metres.
-const CLEAR: f32 = 0.01;
+/// How far above the higher sole [`clear_beneath`] stops looking, metres: a foot's joints
+/// lie within the contact tolerance of what they stand on.
+const ABOVE_SOLE: f32 = 0.05;
+
+/// The spacing of the distance grid ours' pose checks read, metres: fine enough that a check
+/// on it agrees with the scene's own on nearly every pose (the tables score every path's
+/// poses against the scene itself).
+pub const DISTANCE_CELL: f32 = 0.03;
+
+/// The spacing of the surface columns [`clear_beneath`] reads, metres.
+pub const BENEATH_CELL: f32 = 0.02;
+
+/// The scene sampled once per room for ours' pose checks: its signed distances (every
+/// joint's and bone's clearance and support) and its surfaces along vertical lines (what lies
+/// beneath a pelvis, which the distances cannot tell near a thin top).
+#[derive(Clone, Debug)]
+pub struct SceneTables {
+    /// The signed distances at [`DISTANCE_CELL`].
+    pub distances: DistanceGrid,
+    /// The surfaces beneath every point, at [`BENEATH_CELL`].
+    pub beneath: SurfaceColumns,
+}
+
+impl SceneTables {
+    /// Both tables over `scene`'s bounding box grown by 0.2 m.
+    ///
+    /// # Errors
+    /// Errors of [`DistanceGrid::around`] and [`SurfaceColumns::around`] (an empty scene, one
+    /// too large to sample).
+    pub fn of(scene: &Scene) -> envfield_scene::Result<Self> {
+        Ok(Self {
+            distances: DistanceGrid::around(scene, 0.2, DISTANCE_CELL)?,
+            beneath: SurfaceColumns::around(scene, 0.2, BENEATH_CELL)?,
+        })
+    }
+
+    /// Bytes of both tables.
+    pub fn bytes(&self) -> usize {
+        self.distances.bytes() + self.beneath.bytes()
+    }
+}
 
 /// `p` as a point.
 pub fn point(p: Point3m) -> Point3<f32> {

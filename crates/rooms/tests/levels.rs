@@ -72,14 +72,7 @@ fn the_standing_region_joins_two_floors_by_their_ramp_and_ours_climbs_it() {
         repeat: true,
         kind: PairKind::Walk,
     };
-    let room = RoomContext {
-        scene: &scene,
-        region: &region,
-        net: None,
-        distances: None,
-        distances_s: 0.0,
-        navmesh: None,
-    };
+    let room = RoomContext::bare(&scene, &region);
     let settings = RunSettings {
         budget: 5.0,
         big_budget: 0,

@@ -79,7 +79,7 @@ fn only_the_search_with_affordance_keeps_every_pose_valid() {
         face_the_move: true,
         affordance: Default::default(),
         clear_beneath: false,
-        distances: None,
+        tables: None,
     };
     let search = FieldSearch3 {
         step,
@@ -195,8 +195,8 @@ fn ours_reads_its_field_and_distances_once_and_the_costs_are_split() {
     }
     assert!(table.voxels().values().iter().any(|v| v.is_infinite()));
 
-    let (distances, distances_s) = RoomContext::distances(&scene).unwrap();
-    assert!(distances_s > 0.0 && distances.bytes() > 0);
+    let (tables, tables_s) = RoomContext::tables(&scene).unwrap();
+    assert!(tables_s > 0.0 && tables.bytes() > 0);
     let pair = Pair {
         start,
         goal,
@@ -208,8 +208,8 @@ fn ours_reads_its_field_and_distances_once_and_the_costs_are_split() {
         scene: &scene,
         region: &region,
         net: Some(&net),
-        distances: Some(&distances),
-        distances_s,
+        tables: Some(&tables),
+        tables_s,
         navmesh: None,
     };
     let settings = RunSettings {
@@ -232,7 +232,7 @@ fn ours_reads_its_field_and_distances_once_and_the_costs_are_split() {
     let exact = &runs[0].outcome;
     assert!(exact.reached, "{exact:?}");
     assert!(exact.poses.valid > 99.9, "on the grid: {exact:?}");
-    assert!(exact.goal_seconds > 0.0 && exact.room_seconds == distances_s);
+    assert!(exact.goal_seconds > 0.0 && exact.room_seconds == tables_s);
     assert!(runs[1].outcome.goal_seconds > 0.0);
     let mesh = &runs[2].outcome;
     assert!(mesh.reached && mesh.room_seconds == 0.25 && mesh.goal_seconds == 0.0);

@@ -168,3 +168,29 @@ fn over_a_chairs_base_a_body_stands_on_the_floor_and_on_its_seat_it_stands_on_a_
     // Seated on it is what a chair is for.
     assert_eq!(implausible(&room, [2.0, 2.0, 0.55]).unwrap(), None);
 }
+
+#[test]
+fn a_bar_between_the_legs_below_the_shins_is_not_clear_beneath() {
+    // A stool's footrest bar 0.23 m up, beside its 0.45 m seat: half the seat's height, below
+    // a standing body's shins. The body stands with the bar between its legs.
+    let stool = SceneObject::new("stool", ObjectKind::Chair)
+        .with(Primitive::cuboid([0.4, 0.4, 0.05]), at(2.0, 2.0, 0.425))
+        .unwrap()
+        .with(Primitive::cuboid([0.05, 0.05, 0.4]), at(2.0, 2.0, 0.2))
+        .unwrap()
+        .with(Primitive::cuboid([0.03, 0.8, 0.03]), at(2.0, 2.0, 0.23))
+        .unwrap();
+    let room = room_with(stool, [0.4, 0.8, 0.45], Some(0.45));
+    let over_bar = placed(standing_pose(), 2.0, 2.36, 0.0);
+    assert!(!clear_beneath(&room.scene, &over_bar).unwrap());
+    assert_eq!(
+        implausible(&room, over_bar.torso().into()).unwrap(),
+        Some(ObjectKind::Chair)
+    );
+    // A step to the side, only the floor beneath: 5 cm above the soles is where it stops.
+    let beside = placed(standing_pose(), 2.3, 2.36, 0.0);
+    assert!(clear_beneath(&room.scene, &beside).unwrap());
+    // The same body lifted 4 cm off the floor still counts the floor as beneath its feet.
+    let lifted = placed(standing_pose(), 2.3, 2.36, 0.04);
+    assert!(clear_beneath(&room.scene, &lifted).unwrap());
+}

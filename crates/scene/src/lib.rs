@@ -5,7 +5,8 @@
 //!   boxes, balls, capsules, cylinders) or triangle meshes, with the signed distance at any
 //!   point (negative inside), the nearest surface point and normal ([`Scene::closest`]), ray
 //!   casts and batched queries in parallel ([`Scene::signed_distances`]). A
-//!   [`DistanceGrid`] samples it once for fast approximate reads ([`SignedDistance`]).
+//!   [`DistanceGrid`] samples it once for fast approximate reads ([`SignedDistance`]), and
+//!   [`SurfaceColumns`] the surfaces straight beneath every point ([`SurfacesBeneath`]).
 //! - [`TriangleMesh`]: OBJ and PLY input and output (a scanned room is one mesh,
 //!   [`Scene::from_mesh`]); point clouds and paths export with [`write_point_cloud`] and
 //!   [`write_polyline_obj`].
@@ -37,6 +38,7 @@
 //! ```
 
 mod catalogue;
+mod columns;
 mod error;
 mod floor;
 mod grid;
@@ -49,6 +51,7 @@ mod scene;
 mod solid;
 
 pub use catalogue::{catalogue_room, Catalogue, CatalogueItem, CATALOGUE_DIR};
+pub use columns::{SurfaceColumns, SurfacesBeneath};
 pub use error::{Result, SceneError};
 pub use floor::{floor_map, FloorMap, FloorMapConfig, MapFrame};
 pub use grid::{DistanceGrid, SignedDistance};
