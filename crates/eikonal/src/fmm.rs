@@ -93,6 +93,10 @@ pub struct SolveOptions2<'a> {
     pub speed: Option<&'a Field2>,
     /// Stop as soon as this cell is accepted; cells not yet accepted are left infinite.
     pub stop_at: Option<Cell2>,
+    /// After `stop_at` is accepted, go on accepting cells up to this much above its value
+    /// (in the solve's units; 0 stops at once): a band beyond it, for a search from that
+    /// cell that may need to climb a little.
+    pub past_stop: f32,
 }
 
 /// Optional inputs of a 3D fast-marching solve.
@@ -102,6 +106,17 @@ pub struct SolveOptions3<'a> {
     pub speed: Option<&'a Field3>,
     /// Stop as soon as this cell is accepted; cells not yet accepted are left infinite.
     pub stop_at: Option<Cell3>,
+    /// As [`SolveOptions2::past_stop`].
+    pub past_stop: f32,
+}
+
+fn check_band(past_stop: f32) -> Result<()> {
+    if past_stop.is_nan() || past_stop < 0.0 {
+        return Err(EikonalError::InvalidConfig(format!(
+            "past_stop must be >= 0 (infinite marches on to the end), got {past_stop}"
+        )));
+    }
+    Ok(())
 }
 
 fn check_speeds(values: &[f32], cell_name: impl Fn(usize) -> String) -> Result<()> {
@@ -218,12 +233,14 @@ impl FastMarching {
         if let Some(stop) = options.stop_at {
             grid.check(stop)?;
         }
+        check_band(options.past_stop)?;
         let values = march(&Problem {
             dims: [grid.rows(), grid.cols()],
             obstacles: grid.obstacles(),
             speed: options.speed.map(Field2::values),
             sources: &src,
             stop_at: options.stop_at.map(|c| [c.row, c.col]),
+            past_stop: options.past_stop,
             spacing: self.spacing as f64,
             second_order: self.order == Order::Second,
             source_radius: self.source_radius,
@@ -283,12 +300,14 @@ impl FastMarching {
         if let Some(stop) = options.stop_at {
             grid.check(stop)?;
         }
+        check_band(options.past_stop)?;
         let values = march(&Problem {
             dims: grid.shape(),
             obstacles: grid.obstacles(),
             speed: options.speed.map(Field3::values),
             sources: &src,
             stop_at: options.stop_at.map(|c| [c.x, c.y, c.z]),
+            past_stop: options.past_stop,
             spacing: self.spacing as f64,
             second_order: self.order == Order::Second,
             source_radius: self.source_radius,

@@ -16,6 +16,8 @@ pub(crate) struct Problem<'a, const N: usize> {
     pub speed: Option<&'a [f32]>,
     pub sources: &'a [[usize; N]],
     pub stop_at: Option<[usize; N]>,
+    /// How far above `stop_at`'s value the march goes on (0: it stops there).
+    pub past_stop: f32,
     pub spacing: f64,
     pub second_order: bool,
     /// Cells within this many cells (per axis) of a source, with a clear line of sight, get the
@@ -432,20 +434,32 @@ fn march_with<const N: usize, const ARITY: usize>(p: &Problem<'_, N>, lat: Latti
         m.recs[i].tag = KNOWN;
     }
     let stop = p.stop_at.map(|c| lat.padded(c));
-    let stopped_early = stop.is_some_and(|s| m.recs[s].tag == KNOWN);
+    let band = p.past_stop > 0.0;
+    // A stop cell among the sources is known already: the band counts from its value.
+    let mut limit = match stop {
+        Some(s) if m.recs[s].tag == KNOWN && band => m.recs[s].known + p.past_stop,
+        _ => f32::INFINITY,
+    };
+    let stopped_early = stop.is_some_and(|s| m.recs[s].tag == KNOWN) && !band;
     if !stopped_early {
         for &i in &frozen {
             m.update_neighbours(i);
         }
         while let Some(entry) = m.heap.pop(&mut m.recs) {
             let (value, i) = unpack(entry);
+            if value > limit {
+                break;
+            }
             let i = i as usize;
             m.recs[i] = Rec {
                 known: value,
                 tag: KNOWN,
             };
             if Some(i) == stop {
-                break;
+                if !band {
+                    break;
+                }
+                limit = value + p.past_stop;
             }
             if m.prefetch {
                 if let Some(next) = m.heap.peek_cell() {

@@ -98,6 +98,7 @@ fn travel_time_scales_with_speed_and_spacing() {
             SolveOptions2 {
                 speed: Some(&fast),
                 stop_at: None,
+                ..Default::default()
             },
         )
         .unwrap();
@@ -125,6 +126,7 @@ fn travel_time_scales_with_speed_and_spacing() {
             SolveOptions2 {
                 speed: Some(&speed),
                 stop_at: None,
+                ..Default::default()
             },
         )
         .unwrap();
@@ -155,6 +157,7 @@ fn early_stop_keeps_the_target_value() {
             SolveOptions2 {
                 speed: None,
                 stop_at: Some(target),
+                ..Default::default()
             },
         )
         .unwrap();
@@ -162,4 +165,50 @@ fn early_stop_keeps_the_target_value() {
     let missing = part.values().iter().filter(|v| v.is_infinite()).count();
     let missing_full = full.values().iter().filter(|v| v.is_infinite()).count();
     assert!(missing > missing_full, "the early stop skipped nothing");
+}
+
+/// Past the stop cell the march goes on through a band: every cell up to that much above
+/// the stop's value has the full march's value exactly, and no cell beyond it is reached.
+#[test]
+fn the_band_past_the_stop_cell_is_the_full_fields() {
+    let grid = Grid3::from_obstacles([24, 20, 6], vec![false; 24 * 20 * 6]).unwrap();
+    let source = Cell3::new(2, 2, 1);
+    let stop = Cell3::new(12, 10, 3);
+    let full = FastMarching::default().solve3(&grid, &[source]).unwrap();
+    let band = 4.0;
+    let part = FastMarching::default()
+        .solve3_with(
+            &grid,
+            &[source],
+            envfield_eikonal::SolveOptions3 {
+                stop_at: Some(stop),
+                past_stop: band,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+    let limit = full.get(stop).unwrap() + band;
+    let (mut kept, mut left) = (0, 0);
+    for (f, p) in full.values().iter().zip(part.values()) {
+        if *f <= limit - 1e-3 {
+            assert_eq!(f.to_bits(), p.to_bits(), "{f} against {p} within the band");
+            kept += 1;
+        } else if *f > limit + 1e-3 {
+            assert!(p.is_infinite(), "{p} reached beyond the band (full {f})");
+            left += 1;
+        }
+    }
+    assert!(kept > 0 && left > 0, "{kept} kept, {left} left");
+    for bad in [f32::NAN, -1.0] {
+        let e = FastMarching::default().solve3_with(
+            &grid,
+            &[source],
+            envfield_eikonal::SolveOptions3 {
+                stop_at: Some(stop),
+                past_stop: bad,
+                ..Default::default()
+            },
+        );
+        assert!(e.unwrap_err().to_string().contains("past_stop"));
+    }
 }

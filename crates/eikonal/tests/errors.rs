@@ -56,6 +56,7 @@ fn bad_speed_maps_are_named() {
                 SolveOptions2 {
                     speed: Some(&s),
                     stop_at: None,
+                    ..Default::default()
                 },
             )
             .unwrap_err();
@@ -70,6 +71,7 @@ fn bad_speed_maps_are_named() {
             SolveOptions2 {
                 speed: Some(&s),
                 stop_at: None,
+                ..Default::default()
             },
         )
         .unwrap_err();
@@ -87,6 +89,7 @@ fn bad_speed_maps_are_named() {
         SolveOptions2 {
             speed: Some(&s),
             stop_at: None,
+            ..Default::default()
         },
     );
     assert!(matches!(e, Err(EikonalError::SourceOnObstacle { .. })));
@@ -98,6 +101,7 @@ fn bad_speed_maps_are_named() {
         SolveOptions3 {
             speed: Some(&s3),
             stop_at: None,
+            ..Default::default()
         },
     );
     assert!(matches!(e, Err(EikonalError::SpeedShape { .. })));
@@ -128,6 +132,7 @@ fn a_stop_cell_outside_the_grid_is_an_error() {
         SolveOptions2 {
             speed: None,
             stop_at: Some(Cell2::new(7, 7)),
+            ..Default::default()
         },
     );
     assert!(e.is_err());

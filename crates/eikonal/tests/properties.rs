@@ -253,6 +253,7 @@ fn speed_maps_and_several_sources() {
                             envfield_eikonal::SolveOptions3 {
                                 speed: Some(&sp),
                                 stop_at: None,
+                                ..Default::default()
                             },
                         )
                         .unwrap();
@@ -276,6 +277,7 @@ fn speed_maps_and_several_sources() {
                             envfield_eikonal::SolveOptions2 {
                                 speed: Some(&sp),
                                 stop_at: None,
+                                ..Default::default()
                             },
                         )
                         .unwrap();

@@ -5,7 +5,7 @@
 //! fast marching, or one batched network pass), then read by interpolation at every step.
 
 use crate::{AccessibleRegion, Result, RoomsError};
-use envfield_eikonal::{FastMarching, Order};
+use envfield_eikonal::{FastMarching, Order, SolveOptions3};
 use envfield_grid::{Cell3, ContinuousField3, Field3, Point3, Point3m};
 use envfield_nets::{Batch, FieldNet, ModelConfig};
 use envfield_scene::VoxelFrame;
@@ -62,12 +62,45 @@ impl VoxelField3 {
     /// # Errors
     /// As [`ExactField3::new`].
     pub fn at_cell(region: &AccessibleRegion, goal: Cell3) -> Result<Self> {
+        Self::march(region, goal, SolveOptions3::default())
+    }
+
+    /// The field for the goal voxel `goal` marched only as far as one path from `start`
+    /// needs: until the start's voxel and `band` metres beyond its value, infinite further
+    /// out. A descent from the start never climbs above its own value; the band leaves room
+    /// for a search to go round what the poses refuse.
+    ///
+    /// # Errors
+    /// As [`ExactField3::new`]; [`RoomsError::InvalidInput`] for a start outside the region
+    /// or a band that is negative or NaN.
+    pub fn toward(
+        region: &AccessibleRegion,
+        goal: Cell3,
+        start: [f32; 3],
+        band: f32,
+    ) -> Result<Self> {
+        let stop = region.cell(start, "start")?;
+        if band.is_nan() || band < 0.0 {
+            return Err(RoomsError::InvalidInput(format!(
+                "the band past the start must be >= 0 metres, got {band}"
+            )));
+        }
+        let options = SolveOptions3 {
+            stop_at: Some(stop),
+            past_stop: band / region.frame.voxel,
+            ..Default::default()
+        };
+        Self::march(region, goal, options)
+    }
+
+    fn march(region: &AccessibleRegion, goal: Cell3, options: SolveOptions3) -> Result<Self> {
         if !region.grid.is_free(goal) {
             return Err(RoomsError::InvalidInput(format!(
                 "goal voxel {goal:?} is outside the accessible region"
             )));
         }
-        let cells = FastMarching::with_order(Order::Second).solve3(&region.grid, &[goal])?;
+        let cells =
+            FastMarching::with_order(Order::Second).solve3_with(&region.grid, &[goal], options)?;
         let v = region.frame.voxel;
         let metres = Field3::new(
             cells.shape(),

@@ -608,6 +608,11 @@ impl<'a> PairSetup<'a> {
     }
 }
 
+/// How far past a pair's start ours' exact field is marched, metres
+/// ([`ExactField3::toward`]): room for the search to go round what the poses refuse, at a
+/// fraction of the whole region's march.
+pub const EXACT_BAND: f32 = 1.0;
+
 /// Runs every planner of `planners` on one pair of the room, each timed on its own (per path,
 /// and its per-goal and per-room work apart), its poses fitted and checked against the scene.
 ///
@@ -624,7 +629,7 @@ pub fn run_pair(
     let goal_cell = region.cell(pair.goal, "goal")?;
     region.cell(pair.start, "start")?;
     let t = Instant::now();
-    let exact = ExactField3::at_cell(region, goal_cell)?;
+    let exact = ExactField3::toward(region, goal_cell, pair.start, EXACT_BAND)?;
     let exact_s = t.elapsed().as_secs_f64();
     let shortest = exact.value(pair.start)? as f64;
     let learned = room

@@ -38,6 +38,10 @@ impl StepFilter for AccessibleRegion {
     ) -> envfield_plan::Result<Vec<bool>> {
         Ok(candidates.iter().map(|&c| self.contains(c)).collect())
     }
+
+    fn may_keep(&self, p: Point3m) -> bool {
+        self.contains(p)
+    }
 }
 
 /// With affordance: a candidate is allowed when it lies in the accessible region and the
@@ -189,6 +193,10 @@ impl StepFilter for PoseFilter<'_> {
                 .map_err(|e| PlanError::Invalid(format!("pose check: {e}")))
             })
             .collect()
+    }
+
+    fn may_keep(&self, p: Point3m) -> bool {
+        self.region.contains(p)
     }
 }
 

@@ -104,6 +104,20 @@ fn the_exact_field_of_an_open_box_is_the_distance() {
     assert!(g[0] > 0.9 && g[1].abs() < 0.2, "{g:?}");
     assert!(ExactField3::new(&region, [10.0, 0.0, 0.0]).is_err());
     assert!(field.value([f32::NAN, 0.0, 0.0]).is_err());
+
+    // Marched toward one start and a band of 0.5 m past it: the same values out to the
+    // start's and the band, nothing beyond.
+    let start = region.frame.center(Cell3::new(25, 5, 2));
+    let near = ExactField3::toward(&region, Cell3::new(5, 5, 2), start.into(), 0.5).unwrap();
+    for p in [[2.5, 0.55, 0.25], [1.0, 0.55, 0.25], [2.9, 0.55, 0.25]] {
+        assert_eq!(near.value(p).unwrap(), field.value(p).unwrap(), "{p:?}");
+    }
+    assert!(near.value([3.8, 0.55, 0.25]).unwrap().is_infinite());
+    assert!(field.value([3.8, 0.55, 0.25]).unwrap().is_finite());
+    for band in [f32::NAN, -0.1] {
+        assert!(ExactField3::toward(&region, Cell3::new(5, 5, 2), start.into(), band).is_err());
+    }
+    assert!(ExactField3::toward(&region, Cell3::new(5, 5, 2), [10.0, 0.0, 0.0], 0.5).is_err());
 }
 
 /// Near a wall the exact field stays finite in every accessible voxel (trilinear over the

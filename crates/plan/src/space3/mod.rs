@@ -21,6 +21,13 @@ pub trait StepFilter {
     /// # Errors
     /// When the check itself fails (a bad point, a failing scene query).
     fn keep(&self, step: usize, from: Point3m, candidates: &[Point3m]) -> Result<Vec<bool>>;
+
+    /// Whether `p` could be allowed at all, whatever the step: a cheap necessary condition
+    /// (the free space alone, before any pose), which a caller with many points to check
+    /// asks of them all first. Every point, unless the filter says otherwise.
+    fn may_keep(&self, _p: Point3m) -> bool {
+        true
+    }
 }
 
 /// Every candidate is allowed.

@@ -308,15 +308,22 @@ impl FieldSearch3 {
     {
         let from = *so_far.last().expect("a start");
         let n = (distance(from, to) / self.step).ceil().max(1.0) as usize;
-        let mut steps = Vec::with_capacity(n);
+        let steps: Vec<Point3m> = (1..=n)
+            .map(|k| {
+                let t = k as f32 / n as f32;
+                std::array::from_fn(|a| from[a] + t * (to[a] - from[a]))
+            })
+            .collect();
+        // The cheap test of every step first: a cut that leaves the free space far along
+        // costs no pose before it.
+        if !steps.iter().all(|&p| filter.may_keep(p)) {
+            return Ok(None);
+        }
         let mut prev = from;
-        for k in 1..=n {
-            let t = k as f32 / n as f32;
-            let p = std::array::from_fn(|a| from[a] + t * (to[a] - from[a]));
-            if !filter.keep(so_far.len() - 1 + steps.len(), prev, &[p])?[0] {
+        for (k, &p) in steps.iter().enumerate() {
+            if !filter.keep(so_far.len() - 1 + k, prev, &[p])?[0] {
                 return Ok(None);
             }
-            steps.push(p);
             prev = p;
         }
         Ok(Some(steps))
