@@ -54,14 +54,21 @@ impl<const N: usize> Lattice<N> {
 
     /// Calls `f(original_index, padded_index)` for every cell in C order.
     fn for_each(&self, mut f: impl FnMut(usize, usize)) {
+        self.for_each_row(|o, i, n| {
+            for j in 0..n {
+                f(o + j, i + j);
+            }
+        });
+    }
+
+    /// Calls `f(original_start, padded_start, length)` for every row along the last axis, in
+    /// C order: a row is contiguous in both layouts, so a loop over it can be vectorised.
+    fn for_each_row(&self, mut f: impl FnMut(usize, usize, usize)) {
         let inner = self.dims[N - 1];
         let mut idx = [0usize; N];
         let mut orig = 0;
         loop {
-            let base = self.padded(idx);
-            for j in 0..inner {
-                f(orig + j, base + j);
-            }
+            f(orig, self.padded(idx), inner);
             orig += inner;
             // Advance the odometer over all axes but the last.
             let mut k = N - 1;
@@ -371,24 +378,45 @@ pub(crate) fn march<const N: usize>(p: &Problem<'_, N>) -> Vec<f32> {
     }
 }
 
+thread_local! {
+    /// The last march's cell records on this thread, kept for the next one: a fresh
+    /// allocation as large as the grid comes from the system a zeroed page at a time, which
+    /// cost a small grid's solve as much as its marching.
+    static SPARE: std::cell::Cell<Vec<Rec>> = const { std::cell::Cell::new(Vec::new()) };
+}
+
+/// The most records [`SPARE`] keeps between solves (8 MB).
+const SPARE_MAX: usize = 1 << 20;
+
 fn march_with<const N: usize, const ARITY: usize>(p: &Problem<'_, N>, lat: Lattice<N>) -> Vec<f32> {
-    let mut recs = vec![
+    let mut recs = SPARE.take();
+    recs.clear();
+    recs.resize(
+        lat.len,
         Rec {
             known: f32::INFINITY,
-            tag: BLOCKED
-        };
-        lat.len
-    ];
+            tag: BLOCKED,
+        },
+    );
     let mut tau = p.speed.map(|_| vec![f64::INFINITY; lat.len]);
-    lat.for_each(|o, i| {
-        let speed = p.speed.map_or(1.0, |s| s[o]);
-        if !p.obstacles[o] && speed > 0.0 {
-            recs[i].tag = FAR;
-            if let Some(t) = tau.as_mut() {
-                t[i] = p.spacing / speed as f64;
+    if p.speed.is_none() {
+        // Unit speed, the common case: a branch-free pass a row at a time.
+        lat.for_each_row(|o, i, n| {
+            for (r, &blocked) in recs[i..i + n].iter_mut().zip(&p.obstacles[o..o + n]) {
+                r.tag = if blocked { BLOCKED } else { FAR };
             }
-        }
-    });
+        });
+    } else {
+        lat.for_each(|o, i| {
+            let speed = p.speed.map_or(1.0, |s| s[o]);
+            if !p.obstacles[o] && speed > 0.0 {
+                recs[i].tag = FAR;
+                if let Some(t) = tau.as_mut() {
+                    t[i] = p.spacing / speed as f64;
+                }
+            }
+        });
+    }
     let mut m = Marcher::<N, ARITY> {
         strides: lat.strides,
         recs,
@@ -470,10 +498,15 @@ fn march_with<const N: usize, const ARITY: usize>(p: &Problem<'_, N>, lat: Latti
         }
     }
 
-    let mut out = vec![f32::INFINITY; p.obstacles.len()];
-    lat.for_each(|o, i| {
-        out[o] = m.recs[i].known;
+    // Rows come in C order, so the output is written once, front to back.
+    let mut out = Vec::with_capacity(p.obstacles.len());
+    lat.for_each_row(|o, i, n| {
+        debug_assert_eq!(o, out.len());
+        out.extend(m.recs[i..i + n].iter().map(|r| r.known));
     });
+    if m.recs.len() <= SPARE_MAX {
+        SPARE.set(m.recs);
+    }
     out
 }
 

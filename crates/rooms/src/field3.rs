@@ -87,7 +87,7 @@ impl VoxelField3 {
         }
         let options = SolveOptions3 {
             stop_at: Some(stop),
-            past_stop: band / region.frame.voxel,
+            past_stop: band,
             ..Default::default()
         };
         Self::march(region, goal, options)
@@ -99,13 +99,13 @@ impl VoxelField3 {
                 "goal voxel {goal:?} is outside the accessible region"
             )));
         }
-        let cells =
-            FastMarching::with_order(Order::Second).solve3_with(&region.grid, &[goal], options)?;
-        let v = region.frame.voxel;
-        let metres = Field3::new(
-            cells.shape(),
-            cells.values().iter().map(|d| d * v).collect(),
-        )?;
+        // Marched in metres: no second pass over the whole box to scale it.
+        let fmm = FastMarching {
+            order: Order::Second,
+            spacing: region.frame.voxel,
+            ..FastMarching::default()
+        };
+        let metres = fmm.solve3_with(&region.grid, &[goal], options)?;
         Ok(Self {
             metres,
             frame: region.frame,
