@@ -630,6 +630,11 @@ pub struct RegionQuality {
     pub seat_coverage_pct: f64,
     /// Seats in the room.
     pub seats: usize,
+    /// Seats whose sitting torso location lies within 0.15 m of an accessible region voxel's
+    /// centre, percent: the region keeps only its largest connected set of voxels, so a seat
+    /// the samples cover may still be left out of it, and out of every planner's reach.
+    #[serde(default)]
+    pub region_seat_coverage_pct: f64,
     /// Kept samples that [`implausible`] finds on or inside furniture people do not use that
     /// way, percent of those kept.
     pub implausible_pct: f64,
@@ -650,6 +655,7 @@ impl RegionQuality {
             "affordable_pct": m(|x| x.affordable_pct),
             "floor_coverage_pct": m(|x| x.floor_coverage_pct),
             "seat_coverage_pct": m(|x| x.seat_coverage_pct),
+            "region_seat_coverage_pct": m(|x| x.region_seat_coverage_pct),
             "implausible_pct": m(|x| x.implausible_pct),
             "region_implausible_pct": m(|x| x.region_implausible_pct),
         })
@@ -665,6 +671,7 @@ impl RegionQuality {
         let mut out = Self::mean_json(qualities);
         out["min_floor_coverage_pct"] = least(|q| q.floor_coverage_pct).into();
         out["min_seat_coverage_pct"] = least(|q| q.seat_coverage_pct).into();
+        out["min_region_seat_coverage_pct"] = least(|q| q.region_seat_coverage_pct).into();
         let most = |f: fn(&RegionQuality) -> f64| qualities.iter().map(f).fold(0.0f64, f64::max);
         out["max_implausible_pct"] = most(|q| q.implausible_pct).into();
         out["max_region_implausible_pct"] = most(|q| q.region_implausible_pct).into();
@@ -729,12 +736,16 @@ pub fn region_quality(
             .collect::<Result<Vec<bool>>>()?;
         Ok(100.0 * bad.iter().filter(|&&b| b).count() as f64 / points.len().max(1) as f64)
     };
-    let (region_voxels, region_implausible_pct) = if kept.is_empty() {
-        (0, 0.0)
+    let (region_voxels, region_implausible_pct, region_seat_coverage_pct) = if kept.is_empty() {
+        (0, 0.0, 0.0)
     } else {
         let region = AccessibleRegion::from_kept(&room.scene, kept.clone(), config)?;
         let centres = region.voxel_centres();
-        (centres.len(), implausible_share(&centres)?)
+        (
+            centres.len(),
+            implausible_share(&centres)?,
+            covered_pct(&seats, &centres, 0.15),
+        )
     };
     Ok(RegionQuality {
         implausible_pct: implausible_share(&kept)?,
@@ -750,6 +761,7 @@ pub fn region_quality(
         floor_coverage_pct: covered_pct(&floor, &kept, 0.2),
         seat_coverage_pct: covered_pct(&seats, &kept, 0.15),
         seats: seats.len(),
+        region_seat_coverage_pct,
     })
 }
 
