@@ -81,28 +81,25 @@ impl Grid3 {
     /// The 26-connected components of the free voxels (indices as [`Grid3::index`] gives).
     /// O(voxels).
     pub fn free_components(&self) -> Components {
-        let [nx, ny, nz] = self.shape();
         let on: Vec<bool> = self.obstacles().iter().map(|&o| !o).collect();
-        Components::label(&on, |i, visit| {
-            let (x, y, z) = (i / (ny * nz), (i / nz) % ny, i % nz);
-            for dx in -1isize..=1 {
-                for dy in -1isize..=1 {
-                    for dz in -1isize..=1 {
-                        let (a, b, c) = (x as isize + dx, y as isize + dy, z as isize + dz);
-                        if a < 0
-                            || b < 0
-                            || c < 0
-                            || a as usize >= nx
-                            || b as usize >= ny
-                            || c as usize >= nz
-                        {
-                            continue;
-                        }
-                        visit((a as usize * ny + b as usize) * nz + c as usize);
+        Components::label(&on, |i, visit| self.around(i, visit))
+    }
+
+    /// Passes to `visit` the index of each voxel of the up to 26 around the voxel of index `i`
+    /// (free or not; `i` itself not).
+    pub fn around(&self, i: usize, mut visit: impl FnMut(usize)) {
+        let [nx, ny, nz] = self.shape();
+        let (x, y, z) = (i / (ny * nz), (i / nz) % ny, i % nz);
+        for a in x.saturating_sub(1)..(x + 2).min(nx) {
+            for b in y.saturating_sub(1)..(y + 2).min(ny) {
+                for c in z.saturating_sub(1)..(z + 2).min(nz) {
+                    let j = (a * ny + b) * nz + c;
+                    if j != i {
+                        visit(j);
                     }
                 }
             }
-        })
+        }
     }
 }
 

@@ -274,8 +274,10 @@ pub fn standing_places(scene: &Scene, region: &AccessibleRegion) -> Vec<Point3m>
 
 /// Walking pairs between standing places of the region (kept samples that afford standing)
 /// at least a metre apart along the exact field, `count` of them (fewer when 100 `count`
-/// draws do not find them), then, for a generated `room`, a sit-down pair at every seat whose
-/// start and seated torso both lie in the region. Seeded.
+/// draws do not find them), then, for a `room` with known furniture, a sit-down pair at every
+/// seat whose start and seated torso both lie within [`SEAT_NEAR`](crate::SEAT_NEAR) of the
+/// region (each moved to the nearest region voxel's centre when its own voxel is not in it).
+/// Seeded.
 ///
 /// # Errors
 /// [`RoomsError::InvalidInput`] when the region holds fewer than two standing places; errors
@@ -327,9 +329,8 @@ pub fn pairs(
                 let (Some(first), Some(last)) = (seq.frames.first(), seq.frames.last()) else {
                     continue;
                 };
-                let (t0, t1) = (first.torso(), last.torso());
-                let (s, g) = (<[f32; 3]>::from(t0), <[f32; 3]>::from(t1));
-                if region.contains(s) && region.contains(g) {
+                let near = |t: Point3<f32>| region.nearest_within(t.into(), crate::SEAT_NEAR);
+                if let (Some(s), Some(g)) = (near(first.torso()), near(last.torso())) {
                     out.push(Pair {
                         start: s,
                         goal: g,

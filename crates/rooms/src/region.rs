@@ -233,6 +233,158 @@ fn afford_at(scene: &Scene, p: [f32; 3], config: &RegionConfig, kit: &Kit) -> Re
     Ok(out)
 }
 
+/// The seat heights a sit-down is tried onto, metres ([`sit_down`]'s range).
+const SEAT_RANGE: (f32, f32) = (0.3, 0.75);
+
+/// The most samples of one connected set that [`sit_down_bridges`] tries (spread evenly over
+/// the set's samples).
+const BRIDGE_TRIES: usize = 24;
+
+/// [`sit_down_bridges`] tries samples among this many times [`BRIDGE_TRIES`] of a set's
+/// nearest to the largest set.
+const BRIDGE_NEAREST: usize = 4;
+
+/// Each voxel's distance in 26-connected steps from the voxels labelled `from` (all of
+/// `grid`'s voxels, free or not; `u32::MAX` where none is labelled so).
+fn steps_from(grid: &Grid3, labels: &[usize], from: usize) -> Vec<u32> {
+    let mut steps = vec![u32::MAX; labels.len()];
+    let mut queue = std::collections::VecDeque::new();
+    for (i, &l) in labels.iter().enumerate() {
+        if l == from {
+            steps[i] = 0;
+            queue.push_back(i);
+        }
+    }
+    while let Some(i) = queue.pop_front() {
+        let next = steps[i] + 1;
+        grid.around(i, |j| {
+            if steps[j] == u32::MAX {
+                steps[j] = next;
+                queue.push_back(j);
+            }
+        });
+    }
+    steps
+}
+
+/// The sit-downs that join sets of voxels apart from the largest to it: a seated torso's
+/// voxels lie about half a metre below a standing one's, so a seat's set does not touch the
+/// floor's. For each of up to [`BRIDGE_TRIES`] kept samples of every other set (spread over
+/// those nearest the largest set), a sit-down is placed to end seated there at each of the
+/// config's headings, onto a seat as high above the surface under its feet as the sample
+/// makes it (0.3-0.75 m); the first whose standing start lies in or beside the largest set
+/// and whose every pose is valid and [`plausible`] (a frame still standing may rest its
+/// thighs on the seat it nears, as a seated one does) gives its torsos' chain. A set no
+/// sit-down reaches (a table top, specks) stays apart and is dropped with the rest.
+fn sit_down_bridges(
+    scene: &Scene,
+    frame: &VoxelFrame,
+    all: &Grid3,
+    kept: &[[f32; 3]],
+    config: &RegionConfig,
+) -> Result<Vec<Vec<[f32; 3]>>> {
+    let components = all.free_components();
+    let Some(largest) = components.largest() else {
+        return Ok(Vec::new());
+    };
+    // Each other set's samples, nearest the largest set first (in voxel steps): a bed's
+    // edge, not its middle, is where a sit-down from the floor can end.
+    let steps = steps_from(all, &components.labels, largest);
+    // Whether `p`'s voxel or one of its 26 neighbours is in the largest set.
+    let beside_largest = |p: &Point3<f32>| {
+        frame
+            .cell_of(p)
+            .and_then(|c| all.index(c))
+            .is_some_and(|i| steps[i] <= 1)
+    };
+    let mut by_set = std::collections::BTreeMap::<usize, Vec<(u32, [f32; 3])>>::new();
+    for p in kept {
+        if let Some(i) = frame.cell_of(&Point3::from(*p)).and_then(|c| all.index(c)) {
+            let l = components.labels[i];
+            if l != largest && l != usize::MAX {
+                by_set.entry(l).or_default().push((steps[i], *p));
+            }
+        }
+    }
+    let tries: Vec<[f32; 3]> = by_set
+        .into_values()
+        .flat_map(|mut v| {
+            v.sort_by_key(|&(d, _)| d);
+            v.truncate(BRIDGE_NEAREST * BRIDGE_TRIES);
+            let every = v.len().div_ceil(BRIDGE_TRIES);
+            v.into_iter().step_by(every).map(|(_, p)| p)
+        })
+        .collect();
+    if tries.is_empty() {
+        return Ok(Vec::new());
+    }
+    // Where a seated body's torso and feet are, relative to its seat, from one sit-down.
+    let probe = sit_down(&SitConfig::default())?;
+    let seated = *probe.frames.last().expect("a sit-down has frames");
+    let torso_above_seat = seated.torso().z - SitConfig::default().seat_height;
+    let feet = (seated.joint(Joint::LeftAnkle).coords + seated.joint(Joint::RightAnkle).coords)
+        / 2.0
+        - seated.torso().coords;
+    let chains = tries
+        .par_iter()
+        .map(|&s| -> Result<Option<Vec<[f32; 3]>>> {
+            let at = Vector3::from(s);
+            for k in 0..config.yaws {
+                let yaw = k as f32 * std::f32::consts::TAU / config.yaws as f32;
+                // The floor under the feet sets the seat's height: the sit-down ends with
+                // the torso at the sample and the soles on that floor.
+                let turn =
+                    envfield_scene::nalgebra::Rotation3::from_axis_angle(&Vector3::z_axis(), yaw);
+                let foot = Point3::from(at + turn * Vector3::new(feet.x, feet.y, 0.0));
+                let Some(floor) = scene.cast_ray(&foot, &-Vector3::z(), SEAT_RANGE.1 + 0.5)? else {
+                    continue;
+                };
+                let seat = s[2] - torso_above_seat - floor.point.z;
+                if !(SEAT_RANGE.0..=SEAT_RANGE.1).contains(&seat) {
+                    continue;
+                }
+                let seq = sit_down(&SitConfig {
+                    seat_height: seat,
+                    ..SitConfig::default()
+                })?;
+                let (Some(first), Some(last)) = (seq.frames.first(), seq.frames.last()) else {
+                    continue;
+                };
+                let end = last.torso().coords;
+                let place = |p: &Pose| {
+                    p.translated(&-end)
+                        .rotated_about_z(yaw, &Point3::origin())
+                        .translated(&at)
+                };
+                if !beside_largest(&place(first).torso()) {
+                    continue;
+                }
+                // Seated first: a heading that faces into the seat's back fails at once.
+                let mut valid = true;
+                for i in std::iter::once(seq.frames.len() - 1).chain(0..seq.frames.len() - 1) {
+                    let (pose, support) = (place(&seq.frames[i]), seq.supports[i]);
+                    // The thighs near the seat as the hips arrive: a frame still standing
+                    // may rest them there, as a seated one does.
+                    let rests = |s| plausible(scene, &pose, s, &config.affordance);
+                    if !check_pose(scene, &pose, support, &config.affordance)?.valid()
+                        || !(rests(support)? || rests(Support::Sitting)?)
+                    {
+                        valid = false;
+                        break;
+                    }
+                }
+                if valid {
+                    return Ok(Some(
+                        seq.frames.iter().map(|f| place(f).torso().into()).collect(),
+                    ));
+                }
+            }
+            Ok(None)
+        })
+        .collect::<Result<Vec<_>>>()?;
+    Ok(chains.into_iter().flatten().collect())
+}
+
 /// Sampling step along a bone, metres.
 const BONE_STEP: f32 = 0.02;
 /// What a limb keeps between its bone and any surface it does not rest on, metres.
@@ -386,12 +538,18 @@ impl AccessibleRegion {
             return Self::from_samples(scene, kept, config.voxel);
         }
         let in_place = config.in_place();
-        Self::build(scene, kept, config.voxel, |centres| {
-            Ok(afford_all(scene, centres, &in_place)?
-                .iter()
-                .map(Afford::kept)
-                .collect())
-        })
+        Self::build(
+            scene,
+            kept,
+            config.voxel,
+            |centres| {
+                Ok(afford_all(scene, centres, &in_place)?
+                    .iter()
+                    .map(Afford::kept)
+                    .collect())
+            },
+            |frame, all, kept| sit_down_bridges(scene, frame, all, kept, config),
+        )
     }
 
     /// The region of `kept` samples (already filtered) on a lattice covering `scene`.
@@ -400,16 +558,25 @@ impl AccessibleRegion {
     /// [`RoomsError::InvalidInput`] for no samples (a scene with no floor keeps none) or an
     /// empty scene.
     pub fn from_samples(scene: &Scene, kept: Vec<[f32; 3]>, voxel: f32) -> Result<Self> {
-        Self::build(scene, kept, voxel, |centres| Ok(vec![true; centres.len()]))
+        Self::build(
+            scene,
+            kept,
+            voxel,
+            |centres| Ok(vec![true; centres.len()]),
+            |_, _, _| Ok(Vec::new()),
+        )
     }
 
     /// The region of `kept`, each neighbour voxel of a sample's voxel joining when `joins`
-    /// says so of its centre (asked once, for all of them).
+    /// says so of its centre (asked once, for all of them), and the voxels along each chain of
+    /// torso locations `links` gives (for the lattice, the voxels so far and the samples)
+    /// joining too, before the largest connected set is kept.
     fn build(
         scene: &Scene,
         kept: Vec<[f32; 3]>,
         voxel: f32,
         joins: impl FnOnce(&[[f32; 3]]) -> Result<Vec<bool>>,
+        links: impl FnOnce(&VoxelFrame, &Grid3, &[[f32; 3]]) -> Result<Vec<Vec<[f32; 3]>>>,
     ) -> Result<Self> {
         if kept.is_empty() {
             return Err(RoomsError::InvalidInput(
@@ -476,6 +643,20 @@ impl AccessibleRegion {
         for (i, join) in candidates.into_iter().zip(joins(&centres)?) {
             on[i] = join;
         }
+        let all = Grid3::from_obstacles(frame.shape, on.iter().map(|&o| !o).collect())?;
+        for chain in links(&frame, &all, &kept)? {
+            for pair in chain.windows(2) {
+                let (a, b) = (Point3::from(pair[0]), Point3::from(pair[1]));
+                // Steps of at most half a voxel, so the chain's voxels touch.
+                let steps = ((b - a).norm() / (0.5 * voxel)).ceil().max(1.0) as usize;
+                for k in 0..=steps {
+                    let p = a + (b - a) * (k as f32 / steps as f32);
+                    if let Some(c) = frame.cell_of(&p) {
+                        on[index(c)] = true;
+                    }
+                }
+            }
+        }
         // The largest 26-connected set.
         let all = Grid3::from_obstacles(frame.shape, on.iter().map(|&o| !o).collect())?;
         let components = all.free_components();
@@ -495,6 +676,38 @@ impl AccessibleRegion {
         self.frame
             .cell_of(&Point3::from(p))
             .is_some_and(|c| self.grid.is_free(c))
+    }
+
+    /// `p` when its voxel is accessible, else the centre of the accessible voxel nearest `p`
+    /// within `radius` metres (`None` when there is none).
+    pub fn nearest_within(&self, p: [f32; 3], radius: f32) -> Option<[f32; 3]> {
+        if self.contains(p) {
+            return Some(p);
+        }
+        let reach = (radius / self.frame.voxel).ceil() as isize;
+        let lo = self.frame.origin;
+        let v = self.frame.voxel;
+        let at = |a: usize| ((p[a] - lo[a]) / v).floor() as isize;
+        let mut best: Option<(f32, [f32; 3])> = None;
+        for x in at(0) - reach..=at(0) + reach {
+            for y in at(1) - reach..=at(1) + reach {
+                for z in at(2) - reach..=at(2) + reach {
+                    if x < 0 || y < 0 || z < 0 {
+                        continue;
+                    }
+                    let c = Cell3::new(x as usize, y as usize, z as usize);
+                    if !self.grid.is_free(c) {
+                        continue;
+                    }
+                    let q: [f32; 3] = self.frame.center(c).into();
+                    let d = (0..3).map(|a| (q[a] - p[a]).powi(2)).sum::<f32>().sqrt();
+                    if d <= radius && best.is_none_or(|(b, _)| d < b) {
+                        best = Some((d, q));
+                    }
+                }
+            }
+        }
+        best.map(|(_, q)| q)
     }
 
     /// The accessible voxels' centres, metres.
@@ -626,11 +839,12 @@ pub struct RegionQuality {
     pub affordable_pct: f64,
     /// Standing-affordable floor points (10 cm grid) within 0.2 m of a kept sample, percent.
     pub floor_coverage_pct: f64,
-    /// Seats whose sitting torso location lies within 0.15 m of a kept sample, percent.
+    /// Seats whose sitting torso location lies within [`SEAT_NEAR`] of a kept sample,
+    /// percent.
     pub seat_coverage_pct: f64,
     /// Seats in the room.
     pub seats: usize,
-    /// Seats whose sitting torso location lies within 0.15 m of an accessible region voxel's
+    /// Seats whose sitting torso location lies within [`SEAT_NEAR`] of an accessible region voxel's
     /// centre, percent: the region keeps only its largest connected set of voxels, so a seat
     /// the samples cover may still be left out of it, and out of every planner's reach.
     #[serde(default)]
@@ -744,7 +958,7 @@ pub fn region_quality(
         (
             centres.len(),
             implausible_share(&centres)?,
-            covered_pct(&seats, &centres, 0.15),
+            covered_pct(&seats, &centres, SEAT_NEAR),
         )
     };
     Ok(RegionQuality {
@@ -759,11 +973,14 @@ pub fn region_quality(
             100.0 * affordable as f64 / kept.len() as f64
         },
         floor_coverage_pct: covered_pct(&floor, &kept, 0.2),
-        seat_coverage_pct: covered_pct(&seats, &kept, 0.15),
+        seat_coverage_pct: covered_pct(&seats, &kept, SEAT_NEAR),
         seats: seats.len(),
         region_seat_coverage_pct,
     })
 }
+
+/// How near a seat's seated torso location a sample or region voxel covers it, metres.
+pub const SEAT_NEAR: f32 = 0.15;
 
 /// A torso this far above a seat's surface stands on it.
 const STANDING_ABOVE: f32 = 0.6;

@@ -5,7 +5,9 @@
 use envfield_affordance::{
     bones_clear, check_pose, sit_down, standing_pose, AffordanceConfig, Pose, SitConfig, Support,
 };
-use envfield_rooms::{afford, clear_beneath, implausible, plausible, RegionConfig};
+use envfield_rooms::{
+    afford, clear_beneath, implausible, plausible, AccessibleRegion, RegionConfig,
+};
 use envfield_scene::nalgebra::{Isometry3, Vector3};
 use envfield_scene::{Furniture, ObjectKind, Primitive, Room, Scene, SceneObject};
 
@@ -193,4 +195,54 @@ fn a_bar_between_the_legs_below_the_shins_is_not_clear_beneath() {
     // The same body lifted 4 cm off the floor still counts the floor as beneath its feet.
     let lifted = placed(standing_pose(), 2.3, 2.36, 0.04);
     assert!(clear_beneath(&room.scene, &lifted).unwrap());
+}
+
+#[test]
+fn a_seat_joins_the_region_through_a_sit_down() {
+    // A 0.5 m box seat, 0.45 m high, in the middle of the floor; standing torsos over the
+    // floor and seated ones over the seat, as the filter keeps them.
+    let seat = SceneObject::new("seat", ObjectKind::Chair)
+        .with(Primitive::cuboid([0.5, 0.5, 0.45]), at(2.0, 2.0, 0.225))
+        .unwrap();
+    let room = room_with(seat, [0.5, 0.5, 0.45], Some(0.45));
+    let standing = placed(standing_pose(), 0.0, 0.0, 0.0).torso().z;
+    let sit = sit_down(&SitConfig::default()).unwrap();
+    let seated = sit.frames.last().unwrap().torso().z;
+    let config = RegionConfig::default();
+    // The premise: a seated torso's voxel is two voxels or more below a standing one's, so the
+    // seat's voxels do not touch the floor's.
+    assert!(
+        standing - seated > 2.0 * config.voxel,
+        "{standing} {seated}"
+    );
+    let mut drawn = Vec::new();
+    for i in 0..40 {
+        for j in 0..40 {
+            drawn.push([0.05 + 0.1 * i as f32, 0.05 + 0.1 * j as f32, standing]);
+        }
+    }
+    for i in -1..=1 {
+        for j in -1..=1 {
+            drawn.push([2.0 + 0.08 * i as f32, 2.0 + 0.08 * j as f32, seated]);
+        }
+    }
+    let kept: Vec<[f32; 3]> = drawn
+        .iter()
+        .map(|&p| afford(&room.scene, p, &config).unwrap())
+        .filter(|a| a.kept())
+        .map(|a| a.at)
+        .collect();
+    assert!(
+        kept.iter().any(|p| p[2] < standing - 0.2),
+        "a seated torso is kept"
+    );
+    let region = AccessibleRegion::from_kept(&room.scene, kept, &config).unwrap();
+    assert!(
+        region.contains([0.55, 0.55, standing]),
+        "the floor is in the region"
+    );
+    assert!(
+        region.contains([2.0, 2.0, seated]),
+        "the seat is joined to the floor's set"
+    );
 }
