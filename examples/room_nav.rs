@@ -75,7 +75,8 @@ struct Args {
     /// Walking pairs per room (sit-down pairs: one per reachable seat).
     #[arg(long, default_value_t = 4)]
     pairs: usize,
-    /// The VAE's weights.
+    /// The VAE's weights (default: the shipped gated VAE, `models/vae_gated.safetensors`,
+    /// whose regions hold the seats; `models/vae.safetensors` is the paper's).
     #[arg(long)]
     vae: Option<PathBuf>,
     /// The learned field's weights for the room (default: models/room_field_<seed>.safetensors
@@ -140,7 +141,8 @@ fn room_field(
     region: &AccessibleRegion,
 ) -> Result<(FieldNet, Option<f64>)> {
     let generated = args.scene.is_none();
-    let key = format!("{:016x}_{}", region_key(region), args.field_steps);
+    let fingerprint = format!("{:016x}", region_key(region));
+    let key = format!("{fingerprint}_{}", args.field_steps);
     let cached = args
         .fields
         .as_ref()
@@ -165,8 +167,14 @@ fn room_field(
             eprintln!("room {seed}: field loaded from {}", f.display());
         }
         let net = FieldNet::load(&f)?;
-        let fits =
-            matches!(net.config(), ModelConfig::Goal(c) if c.extent == region.frame.shape.to_vec());
+        // A field that carries its region's fingerprint (a kept one, or the shipped one made
+        // from it) fits only that region; one without, any region on a lattice of its shape.
+        let tagged = FieldNet::read_tags(&f, REGION_TAG)?;
+        let same_region = tagged
+            .as_deref()
+            .is_none_or(|t| t.split('_').next() == Some(fingerprint.as_str()));
+        let fits = same_region
+            && matches!(net.config(), ModelConfig::Goal(c) if c.extent == region.frame.shape.to_vec());
         if fits {
             return Ok((net, None));
         }
@@ -237,7 +245,7 @@ fn main() -> Result<()> {
     let vae_file = args
         .vae
         .clone()
-        .unwrap_or_else(|| root().join("models/vae.safetensors"));
+        .unwrap_or_else(|| root().join("models/vae_gated.safetensors"));
     let vae =
         Cvae::load(&vae_file).with_context(|| format!("loading the VAE {}", vae_file.display()))?;
     let catalogue = args.catalogue.then(open_catalogue).transpose()?;

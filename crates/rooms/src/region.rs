@@ -287,8 +287,20 @@ fn sit_down_bridges(
     let Some(largest) = components.largest() else {
         return Ok(Vec::new());
     };
-    // Each other set's samples, nearest the largest set first (in voxel steps): a bed's
-    // edge, not its middle, is where a sit-down from the floor can end.
+    // Each other set's samples (with their voxels), nearest the largest set first (in voxel
+    // steps): a bed's edge, not its middle, is where a sit-down from the floor can end.
+    let mut by_set = std::collections::BTreeMap::<usize, Vec<(usize, [f32; 3])>>::new();
+    for p in kept {
+        if let Some(i) = frame.cell_of(&Point3::from(*p)).and_then(|c| all.index(c)) {
+            let l = components.labels[i];
+            if l != largest && l != usize::MAX {
+                by_set.entry(l).or_default().push((i, *p));
+            }
+        }
+    }
+    if by_set.is_empty() {
+        return Ok(Vec::new());
+    }
     let steps = steps_from(all, &components.labels, largest);
     // Whether `p`'s voxel or one of its 26 neighbours is in the largest set.
     let beside_largest = |p: &Point3<f32>| {
@@ -297,27 +309,15 @@ fn sit_down_bridges(
             .and_then(|c| all.index(c))
             .is_some_and(|i| steps[i] <= 1)
     };
-    let mut by_set = std::collections::BTreeMap::<usize, Vec<(u32, [f32; 3])>>::new();
-    for p in kept {
-        if let Some(i) = frame.cell_of(&Point3::from(*p)).and_then(|c| all.index(c)) {
-            let l = components.labels[i];
-            if l != largest && l != usize::MAX {
-                by_set.entry(l).or_default().push((steps[i], *p));
-            }
-        }
-    }
     let tries: Vec<[f32; 3]> = by_set
         .into_values()
         .flat_map(|mut v| {
-            v.sort_by_key(|&(d, _)| d);
+            v.sort_by_key(|&(i, _)| steps[i]);
             v.truncate(BRIDGE_NEAREST * BRIDGE_TRIES);
             let every = v.len().div_ceil(BRIDGE_TRIES);
             v.into_iter().step_by(every).map(|(_, p)| p)
         })
         .collect();
-    if tries.is_empty() {
-        return Ok(Vec::new());
-    }
     // Where a seated body's torso and feet are, relative to its seat, from one sit-down.
     let probe = sit_down(&SitConfig::default())?;
     let seated = *probe.frames.last().expect("a sit-down has frames");
@@ -529,7 +529,9 @@ impl AccessibleRegion {
     /// The region of `kept` samples (already filtered by `config`'s filter): as
     /// [`AccessibleRegion::from_samples`], except that with [`RegionConfig::plausible`] a
     /// neighbouring voxel joins only if a torso at its centre passes the filter too, so the
-    /// gaps between samples close without the region spilling over a table's edge.
+    /// gaps between samples close without the region spilling over a table's edge, and a set
+    /// of voxels apart from the largest joins it through a sit-down that ends in it (every
+    /// pose of it valid and plausible): a seat's voxels lie half a metre below the floor's.
     ///
     /// # Errors
     /// As [`afford_all`] and [`AccessibleRegion::from_samples`].

@@ -125,8 +125,9 @@ impl Tally {
         text
     }
 
-    /// Table 4 as JSON (`table4_<kind>`: per planner its shares, reach and pair count) into
-    /// `line` and as text rows.
+    /// Table 4 as JSON (`table4_<kind>`: per planner its shares, reach and pair count, and its
+    /// path ratio, implausible share and seconds per path (mean and median) and per goal on
+    /// that kind of pair) into `line` and as text rows.
     pub fn table4(&self, planners: &[PlannerKind], line: &mut Value) -> String {
         let mut text = String::new();
         for (kind, results) in &self.by_kind {
@@ -156,9 +157,21 @@ impl Tally {
                     os.len(),
                     reach.unwrap_or(f64::NAN)
                 );
+                let all: Vec<f64> = os.iter().map(|o| o.seconds).collect();
                 per.insert(
                     planner.name().into(),
-                    json!({"support_pct": s, "free_pct": f, "valid_pct": v, "reach_pct": reach, "pairs": os.len()}),
+                    json!({
+                        "support_pct": s,
+                        "free_pct": f,
+                        "valid_pct": v,
+                        "reach_pct": reach,
+                        "pairs": os.len(),
+                        "path_ratio": m(|o| o.path_ratio),
+                        "implausible_pct": m(|o| o.poses.implausible),
+                        "s": m(|o| o.seconds),
+                        "s_median": finite_median(&all),
+                        "goal_s": m(|o| o.goal_seconds),
+                    }),
                 );
             }
             line[format!("table4_{kind}")] = per.into();
