@@ -19,9 +19,9 @@ use anyhow::{bail, Context, Result};
 use clap::Parser;
 use envfield::rooms::pictures::write_field_view;
 use envfield::rooms::{
-    check_sample_density, draw_torsos, drawn_summary, middle_goal, region_quality, train_field3,
-    uniform_in_room, AccessibleRegion, ExactField3, Field3Config, Field3Report, LearnedField3,
-    RegionConfig, RegionQuality,
+    afford_all, check_sample_density, draw_torsos, judge_region, middle_goal, region_quality,
+    summarise_drawn, train_field3, uniform_in_room, AccessibleRegion, ExactField3, Field3Config,
+    Field3Report, LearnedField3, RegionConfig, RegionQuality,
 };
 use envfield::scene::{
     catalogue_room, generate_room, read_scene, Catalogue, ImportConfig, Room, RoomConfig, Scene,
@@ -211,7 +211,10 @@ fn one(args: &Args, vae: &Cvae) -> Result<()> {
     let sample_ms = t.elapsed().as_secs_f64() * 1e3;
     let config = region_config(args);
     let t = Instant::now();
-    let region = AccessibleRegion::from_drawn(&scene, &samples, &config)?;
+    // The filter once: the region, its quality and the summary all read its answers.
+    let affords = afford_all(&scene, &samples, &config)?;
+    let kept = affords.iter().filter(|a| a.kept()).map(|a| a.at).collect();
+    let region = AccessibleRegion::from_kept(&scene, kept, &config)?;
     let region_ms = t.elapsed().as_secs_f64() * 1e3;
     region.write_samples_ply(args.out.join("samples.ply"))?;
     region.write_ply(args.out.join("region.ply"))?;
@@ -219,7 +222,9 @@ fn one(args: &Args, vae: &Cvae) -> Result<()> {
     let goal = middle_goal(&region);
     let exact = ExactField3::new(&region, goal)?;
     write_field_view(&region, &exact, args.out.join("field_exact.png"))?;
-    let quality = room.as_ref().map(|r| region_quality(r, &samples, &config));
+    let quality = room
+        .as_ref()
+        .map(|r| judge_region(r, &affords, Some(&region)));
     let quality = quality.transpose()?;
     let learned = if args.no_field {
         None
@@ -232,7 +237,7 @@ fn one(args: &Args, vae: &Cvae) -> Result<()> {
         write_field_view(&region, &field, args.out.join("field_learned.png"))?;
         Some(report)
     };
-    let drawn = drawn_summary(&scene, &samples, &config)?;
+    let drawn = summarise_drawn(&samples, &affords);
     let summary = serde_json::json!({
         "affords_clear_supported_valid": drawn["affords_clear_supported_valid"],
         "drawn_by_height_m": drawn["drawn_by_height_m"],
@@ -270,7 +275,13 @@ fn many(args: &Args, vae: &Cvae, rooms: u64) -> Result<()> {
         let seed = 10_000 + k;
         let room = makes.room(seed)?;
         let samples = draw(args, vae, anchors.as_ref(), &room.scene, seed, false)?;
-        ours.push(region_quality(&room, &samples, &config)?);
+        // The filter once for ours: its quality and its field read the same region.
+        let affords = afford_all(&room.scene, &samples, &config)?;
+        let kept: Vec<[f32; 3]> = affords.iter().filter(|a| a.kept()).map(|a| a.at).collect();
+        let region = (!kept.is_empty())
+            .then(|| AccessibleRegion::from_kept(&room.scene, kept, &config))
+            .transpose()?;
+        ours.push(judge_region(&room, &affords, region.as_ref())?);
         random.push(region_quality(
             &room,
             // An untrained gate may pass no anchor at all: the twin decodes every one.
@@ -280,7 +291,7 @@ fn many(args: &Args, vae: &Cvae, rooms: u64) -> Result<()> {
         let box_samples = uniform_in_room(&room, 2.5, args.samples, seed);
         uniform.push(region_quality(&room, &box_samples, &config)?);
         if !args.no_field && k < args.field_rooms {
-            let region = AccessibleRegion::from_drawn(&room.scene, &samples, &config)?;
+            let region = region.with_context(|| format!("room {seed}: no sample kept"))?;
             let cfg = field_config(args, seed);
             let (_, report) = train_field3(&region, &cfg, None, |_, _, _| {})?;
             eprintln!("room {seed}: learned field {report:?}");

@@ -463,13 +463,11 @@ fn march_with<const N: usize, const ARITY: usize>(p: &Problem<'_, N>, lat: Latti
     }
     let stop = p.stop_at.map(|c| lat.padded(c));
     let band = p.past_stop > 0.0;
-    // A stop cell among the sources is known already: the band counts from its value.
-    let mut limit = match stop {
-        Some(s) if m.recs[s].tag == KNOWN && band => m.recs[s].known + p.past_stop,
-        _ => f32::INFINITY,
-    };
-    let stopped_early = stop.is_some_and(|s| m.recs[s].tag == KNOWN) && !band;
-    if !stopped_early {
+    // A stop cell among the sources is known already: the march ends there, or its band
+    // counts from its value.
+    let stop_known = stop.filter(|&s| m.recs[s].tag == KNOWN);
+    let mut limit = stop_known.map_or(f32::INFINITY, |s| m.recs[s].known + p.past_stop);
+    if band || stop_known.is_none() {
         for &i in &frozen {
             m.update_neighbours(i);
         }

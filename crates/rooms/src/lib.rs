@@ -61,8 +61,9 @@ pub use field3::{ExactField3, LearnedField3, VoxelField3};
 pub use field3_train::{train_field3, Field3Config, Field3Report};
 pub use nav::{clear_beneath, offset, point, PoseFilter, SceneTables, BENEATH_CELL, DISTANCE_CELL};
 pub use region::{
-    afford, afford_all, covered_pct, drawn_summary, implausible, plausible, region_quality,
-    uniform_in_room, AccessibleRegion, Afford, RegionConfig, RegionQuality, SEAT_NEAR,
+    afford, afford_all, covered_pct, drawn_summary, implausible, judge_region, plausible,
+    region_quality, summarise_drawn, uniform_in_room, AccessibleRegion, Afford, RegionConfig,
+    RegionQuality, SEAT_NEAR,
 };
 pub use surfaces::{standing_torsos, MAX_COLUMNS, MAX_SLOPE_DEG};
 pub use torsos::{

@@ -906,6 +906,15 @@ pub fn drawn_summary(
     samples: &[[f32; 3]],
     config: &RegionConfig,
 ) -> Result<serde_json::Value> {
+    Ok(summarise_drawn(
+        samples,
+        &afford_all(scene, samples, config)?,
+    ))
+}
+
+/// [`drawn_summary`] of `samples` whose filter answers (as [`afford_all`] gives them, in
+/// order) are `affords`.
+pub fn summarise_drawn(samples: &[[f32; 3]], affords: &[Afford]) -> serde_json::Value {
     let mut heights = std::collections::BTreeMap::<i32, usize>::new();
     for s in samples {
         *heights.entry((s[2] * 10.0).floor() as i32).or_default() += 1;
@@ -915,12 +924,12 @@ pub fn drawn_summary(
         .map(|(k, v)| (format!("{:.1}", k as f32 / 10.0), v.into()))
         .collect();
     let mut kinds = std::collections::BTreeMap::<String, usize>::new();
-    for a in afford_all(scene, samples, config)? {
+    for a in affords {
         *kinds
             .entry(format!("{}:{:?}/{:?}", a.clear, a.supported, a.valid))
             .or_default() += 1;
     }
-    Ok(serde_json::json!({"drawn_by_height_m": heights, "affords_clear_supported_valid": kinds}))
+    serde_json::json!({"drawn_by_height_m": heights, "affords_clear_supported_valid": kinds})
 }
 
 /// Judges `samples` drawn for `room`: the filter's figures, floor coverage and seat coverage.
@@ -933,6 +942,26 @@ pub fn region_quality(
     config: &RegionConfig,
 ) -> Result<RegionQuality> {
     let affords = afford_all(&room.scene, samples, config)?;
+    let kept: Vec<[f32; 3]> = affords.iter().filter(|a| a.kept()).map(|a| a.at).collect();
+    let region = if kept.is_empty() {
+        None
+    } else {
+        Some(AccessibleRegion::from_kept(&room.scene, kept, config)?)
+    };
+    judge_region(room, &affords, region.as_ref())
+}
+
+/// [`region_quality`] of samples whose filter answers (as [`afford_all`] gives them) are
+/// `affords` and whose region (made from the kept ones, `None` when none is kept) is
+/// `region`: for a caller that has both already.
+///
+/// # Errors
+/// As [`region_quality`].
+pub fn judge_region(
+    room: &Room,
+    affords: &[Afford],
+    region: Option<&AccessibleRegion>,
+) -> Result<RegionQuality> {
     let kept: Vec<[f32; 3]> = affords.iter().filter(|a| a.kept()).map(|a| a.at).collect();
     let affordable = affords
         .iter()
@@ -952,23 +981,23 @@ pub fn region_quality(
             .collect::<Result<Vec<bool>>>()?;
         Ok(100.0 * bad.iter().filter(|&&b| b).count() as f64 / points.len().max(1) as f64)
     };
-    let (region_voxels, region_implausible_pct, region_seat_coverage_pct) = if kept.is_empty() {
-        (0, 0.0, 0.0)
-    } else {
-        let region = AccessibleRegion::from_kept(&room.scene, kept.clone(), config)?;
-        let centres = region.voxel_centres();
-        (
-            centres.len(),
-            implausible_share(&centres)?,
-            covered_pct(&seats, &centres, SEAT_NEAR),
-        )
+    let (region_voxels, region_implausible_pct, region_seat_coverage_pct) = match region {
+        None => (0, 0.0, 0.0),
+        Some(region) => {
+            let centres = region.voxel_centres();
+            (
+                centres.len(),
+                implausible_share(&centres)?,
+                covered_pct(&seats, &centres, SEAT_NEAR),
+            )
+        }
     };
     Ok(RegionQuality {
         implausible_pct: implausible_share(&kept)?,
         region_implausible_pct,
         region_voxels,
-        drawn: samples.len(),
-        kept_pct: 100.0 * kept.len() as f64 / samples.len().max(1) as f64,
+        drawn: affords.len(),
+        kept_pct: 100.0 * kept.len() as f64 / affords.len().max(1) as f64,
         affordable_pct: if kept.is_empty() {
             0.0
         } else {
