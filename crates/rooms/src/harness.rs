@@ -8,7 +8,9 @@
 //! pass over the region), and per path (the search, whose steps are lookups).
 
 use crate::SceneTables;
-use crate::{afford, point, sit_on, AccessibleRegion, ExactField3, PoseFilter, RegionConfig};
+use crate::{
+    afford, point, sit_on, AccessibleRegion, ExactField3, PoseFilter, RegionConfig, SitDown,
+};
 use crate::{LearnedField3, Result, RoomsError};
 use envfield_affordance::{
     resample_path, walk, AffordanceReport, PoseSequence, Support, WalkConfig,
@@ -275,8 +277,8 @@ pub fn standing_places(scene: &Scene, region: &AccessibleRegion) -> Vec<Point3m>
 /// Walking pairs between standing places of the region (kept samples that afford standing)
 /// at least a metre apart along the exact field, `count` of them (fewer when 100 `count`
 /// draws do not find them), then, for a `room` with known furniture, a sit-down pair at every
-/// seat whose start and seated torso both lie within [`SEAT_NEAR`](crate::SEAT_NEAR) of the
-/// region (each moved to the nearest region voxel's centre when its own voxel is not in it).
+/// seat the region's sit-downs reach ([`AccessibleRegion::sit_downs`]): of those ending over
+/// the seat, the one ending nearest the middle of its seat, from its standing start to seated.
 /// Seeded.
 ///
 /// # Errors
@@ -325,20 +327,27 @@ pub fn pairs(
     }
     if let Some(room) = room {
         for f in &room.furniture {
-            if let Some(seq) = sit_on(f)? {
-                let (Some(first), Some(last)) = (seq.frames.first(), seq.frames.last()) else {
-                    continue;
-                };
-                let near = |t: Point3<f32>| region.nearest_within(t.into(), crate::SEAT_NEAR);
-                if let (Some(s), Some(g)) = (near(first.torso()), near(last.torso())) {
-                    out.push(Pair {
-                        start: s,
-                        goal: g,
-                        sequence: seq,
-                        repeat: false,
-                        kind: PairKind::Sit,
-                    });
-                }
+            // The region's own sit-down onto this seat: of those ending over it, the one
+            // ending nearest where a body sits down on its middle.
+            let Some(middle) = sit_on(f)?.and_then(|s| s.frames.last().map(|p| p.torso())) else {
+                continue;
+            };
+            let nearest = region
+                .sit_downs
+                .iter()
+                .filter(|s| f.covers(s.seated[0], s.seated[1]))
+                .min_by(|a, b| {
+                    let d = |s: &&SitDown| (Point3::from(s.seated) - middle).norm();
+                    d(a).total_cmp(&d(b))
+                });
+            if let Some(sit) = nearest {
+                out.push(Pair {
+                    start: sit.start,
+                    goal: sit.seated,
+                    sequence: sit.sequence()?,
+                    repeat: false,
+                    kind: PairKind::Sit,
+                });
             }
         }
     }
@@ -583,7 +592,9 @@ impl<'a> PairSetup<'a> {
                 // A walk faces where it goes; a sit-down keeps the heading made for its seat.
                 face_the_move: pair.repeat,
                 affordance: Default::default(),
-                clear_beneath: true,
+                // Nothing between the legs is a walk's check: a sit-down lowers the pelvis
+                // over the seat while its feet still bear the body.
+                clear_beneath: pair.kind == PairKind::Walk,
                 tables,
             },
             search: {

@@ -63,7 +63,7 @@ pub use nav::{clear_beneath, offset, point, PoseFilter, SceneTables, BENEATH_CEL
 pub use region::{
     afford, afford_all, covered_pct, drawn_summary, implausible, judge_region, plausible,
     region_quality, summarise_drawn, uniform_in_room, AccessibleRegion, Afford, RegionConfig,
-    RegionQuality, SEAT_NEAR,
+    RegionQuality, SitDown, SEAT_NEAR,
 };
 pub use surfaces::{standing_torsos, MAX_COLUMNS, MAX_SLOPE_DEG};
 pub use torsos::{

@@ -27,7 +27,7 @@ use crate::torsos::seat_torsos;
 use crate::{Result, RoomsError};
 use envfield_affordance::{
     bones_clear, check_pose, lie_down, sit_down, standing_pose, AffordanceConfig, Joint, LieConfig,
-    Pose, SitConfig, Support,
+    Pose, PoseSequence, SitConfig, Support,
 };
 use envfield_grid::{Cell3, Field2, Grid3, HeatMapStyle};
 use envfield_scene::nalgebra::{Point3, Vector3};
@@ -274,15 +274,15 @@ fn steps_from(grid: &Grid3, labels: &[usize], from: usize) -> Vec<u32> {
 /// config's headings, onto a seat as high above the surface under its feet as the sample
 /// makes it (0.3-0.75 m); the first whose standing start lies in or beside the largest set
 /// and whose every pose is valid and [`plausible`] (a frame still standing may rest its
-/// thighs on the seat it nears, as a seated one does) gives its torsos' chain. A set no
-/// sit-down reaches (a table top, specks) stays apart and is dropped with the rest.
+/// thighs on the seat it nears, as a seated one does) joins its set. A set no sit-down
+/// reaches (a table top, specks) stays apart and is dropped with the rest.
 fn sit_down_bridges(
     scene: &Scene,
     frame: &VoxelFrame,
     all: &Grid3,
     kept: &[[f32; 3]],
     config: &RegionConfig,
-) -> Result<Vec<Vec<[f32; 3]>>> {
+) -> Result<Vec<SitDown>> {
     let components = all.free_components();
     let Some(largest) = components.largest() else {
         return Ok(Vec::new());
@@ -327,7 +327,7 @@ fn sit_down_bridges(
         - seated.torso().coords;
     let chains = tries
         .par_iter()
-        .map(|&s| -> Result<Option<Vec<[f32; 3]>>> {
+        .map(|&s| -> Result<Option<SitDown>> {
             let at = Vector3::from(s);
             for k in 0..config.yaws {
                 let yaw = k as f32 * std::f32::consts::TAU / config.yaws as f32;
@@ -343,30 +343,27 @@ fn sit_down_bridges(
                 if !(SEAT_RANGE.0..=SEAT_RANGE.1).contains(&seat) {
                     continue;
                 }
-                let seq = sit_down(&SitConfig {
+                let sit = SitDown {
+                    start: [0.0; 3],
+                    seated: s,
                     seat_height: seat,
-                    ..SitConfig::default()
-                })?;
-                let (Some(first), Some(last)) = (seq.frames.first(), seq.frames.last()) else {
+                    yaw,
+                };
+                let seq = sit.sequence()?;
+                let Some(first) = seq.frames.first() else {
                     continue;
                 };
-                let end = last.torso().coords;
-                let place = |p: &Pose| {
-                    p.translated(&-end)
-                        .rotated_about_z(yaw, &Point3::origin())
-                        .translated(&at)
-                };
-                if !beside_largest(&place(first).torso()) {
+                if !beside_largest(&first.torso()) {
                     continue;
                 }
                 // Seated first: a heading that faces into the seat's back fails at once.
                 let mut valid = true;
                 for i in std::iter::once(seq.frames.len() - 1).chain(0..seq.frames.len() - 1) {
-                    let (pose, support) = (place(&seq.frames[i]), seq.supports[i]);
+                    let (pose, support) = (&seq.frames[i], seq.supports[i]);
                     // The thighs near the seat as the hips arrive: a frame still standing
                     // may rest them there, as a seated one does.
-                    let rests = |s| plausible(scene, &pose, s, &config.affordance);
-                    if !check_pose(scene, &pose, support, &config.affordance)?.valid()
+                    let rests = |s| plausible(scene, pose, s, &config.affordance);
+                    if !check_pose(scene, pose, support, &config.affordance)?.valid()
                         || !(rests(support)? || rests(Support::Sitting)?)
                     {
                         valid = false;
@@ -374,15 +371,65 @@ fn sit_down_bridges(
                     }
                 }
                 if valid {
-                    return Ok(Some(
-                        seq.frames.iter().map(|f| place(f).torso().into()).collect(),
-                    ));
+                    return Ok(Some(SitDown {
+                        start: first.torso().into(),
+                        ..sit
+                    }));
                 }
             }
             Ok(None)
         })
         .collect::<Result<Vec<_>>>()?;
     Ok(chains.into_iter().flatten().collect())
+}
+
+/// A sit-down the region found ([`AccessibleRegion::sit_downs`]): [`sit_down`] onto a seat of
+/// `seat_height`, turned by `yaw` about the vertical and moved so that it ends seated with
+/// the torso at `seated`; every pose of it valid and plausible where it was found.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SitDown {
+    /// The torso where it starts, standing, metres.
+    pub start: [f32; 3],
+    /// The torso where it ends, seated, metres.
+    pub seated: [f32; 3],
+    /// The seat's height above the surface under the feet, metres (0.3-0.75).
+    pub seat_height: f32,
+    /// The heading it is turned by, radians about +z.
+    pub yaw: f32,
+}
+
+impl SitDown {
+    /// Its poses, placed.
+    ///
+    /// # Errors
+    /// As [`sit_down`] (a seat height outside 0.3-0.75 m); a non-finite place.
+    pub fn sequence(&self) -> Result<PoseSequence> {
+        let seq = sit_down(&SitConfig {
+            seat_height: self.seat_height,
+            ..SitConfig::default()
+        })?;
+        let end = seq
+            .frames
+            .last()
+            .map(|f| f.torso().coords)
+            .unwrap_or_default();
+        let to = Vector3::from(self.seated);
+        let frames = seq
+            .frames
+            .iter()
+            .map(|p| {
+                p.translated(&-end)
+                    .rotated_about_z(self.yaw, &Point3::origin())
+                    .translated(&to)
+            })
+            .collect();
+        Ok(PoseSequence::new(
+            seq.fps,
+            seq.activity,
+            frames,
+            seq.supports,
+        )?)
+    }
 }
 
 /// Sampling step along a bone, metres.
@@ -465,6 +512,9 @@ pub struct AccessibleRegion {
     pub samples: Vec<[f32; 3]>,
     /// Connected sets before the largest was kept.
     pub components: usize,
+    /// The sit-downs that joined seats to the floor's set ([`AccessibleRegion::from_kept`]),
+    /// each ending seated in the region.
+    pub sit_downs: Vec<SitDown>,
     /// The accessible voxels' indices, made on first use.
     free: std::sync::OnceLock<Vec<usize>>,
 }
@@ -498,6 +548,7 @@ impl AccessibleRegion {
             grid,
             samples,
             components,
+            sit_downs: Vec::new(),
             free: std::sync::OnceLock::new(),
         })
     }
@@ -578,7 +629,7 @@ impl AccessibleRegion {
         kept: Vec<[f32; 3]>,
         voxel: f32,
         joins: impl FnOnce(&[[f32; 3]]) -> Result<Vec<bool>>,
-        links: impl FnOnce(&VoxelFrame, &Grid3, &[[f32; 3]]) -> Result<Vec<Vec<[f32; 3]>>>,
+        links: impl FnOnce(&VoxelFrame, &Grid3, &[[f32; 3]]) -> Result<Vec<SitDown>>,
     ) -> Result<Self> {
         if kept.is_empty() {
             return Err(RoomsError::InvalidInput(
@@ -646,9 +697,11 @@ impl AccessibleRegion {
             on[i] = join;
         }
         let all = Grid3::from_obstacles(frame.shape, on.iter().map(|&o| !o).collect())?;
-        for chain in links(&frame, &all, &kept)? {
+        let sit_downs = links(&frame, &all, &kept)?;
+        for sit in &sit_downs {
+            let chain: Vec<Point3<f32>> = sit.sequence()?.frames.iter().map(Pose::torso).collect();
             for pair in chain.windows(2) {
-                let (a, b) = (Point3::from(pair[0]), Point3::from(pair[1]));
+                let (a, b) = (pair[0], pair[1]);
                 // Steps of at most half a voxel, so the chain's voxels touch.
                 let steps = ((b - a).norm() / (0.5 * voxel)).ceil().max(1.0) as usize;
                 for k in 0..=steps {
@@ -670,7 +723,12 @@ impl AccessibleRegion {
                 "the kept samples all lie outside the scene's box".into(),
             ));
         }
-        Self::new(frame, grid, kept, components.count())
+        let mut region = Self::new(frame, grid, kept, components.count())?;
+        region.sit_downs = sit_downs
+            .into_iter()
+            .filter(|s| region.contains(s.seated))
+            .collect();
+        Ok(region)
     }
 
     /// Whether `p` (metres) lies in an accessible voxel.
@@ -678,38 +736,6 @@ impl AccessibleRegion {
         self.frame
             .cell_of(&Point3::from(p))
             .is_some_and(|c| self.grid.is_free(c))
-    }
-
-    /// `p` when its voxel is accessible, else the centre of the accessible voxel nearest `p`
-    /// within `radius` metres (`None` when there is none).
-    pub fn nearest_within(&self, p: [f32; 3], radius: f32) -> Option<[f32; 3]> {
-        if self.contains(p) {
-            return Some(p);
-        }
-        let reach = (radius / self.frame.voxel).ceil() as isize;
-        let lo = self.frame.origin;
-        let v = self.frame.voxel;
-        let at = |a: usize| ((p[a] - lo[a]) / v).floor() as isize;
-        let mut best: Option<(f32, [f32; 3])> = None;
-        for x in at(0) - reach..=at(0) + reach {
-            for y in at(1) - reach..=at(1) + reach {
-                for z in at(2) - reach..=at(2) + reach {
-                    if x < 0 || y < 0 || z < 0 {
-                        continue;
-                    }
-                    let c = Cell3::new(x as usize, y as usize, z as usize);
-                    if !self.grid.is_free(c) {
-                        continue;
-                    }
-                    let q: [f32; 3] = self.frame.center(c).into();
-                    let d = (0..3).map(|a| (q[a] - p[a]).powi(2)).sum::<f32>().sqrt();
-                    if d <= radius && best.is_none_or(|(b, _)| d < b) {
-                        best = Some((d, q));
-                    }
-                }
-            }
-        }
-        best.map(|(_, q)| q)
     }
 
     /// The accessible voxels' centres, metres.
@@ -1039,15 +1065,7 @@ pub fn implausible(room: &Room, p: [f32; 3]) -> Result<Option<ObjectKind>> {
         if f.kind.is_seat() {
             continue;
         }
-        // Into the piece's own frame: its footprint centred, width along x, depth along y.
-        let (s, c) = f.yaw.sin_cos();
-        let (dx, dy) = (p[0] - f.center[0], p[1] - f.center[1]);
-        let (lx, ly) = (c * dx + s * dy, -s * dx + c * dy);
-        if lx.abs() < f.size[0] / 2.0
-            && ly.abs() < f.size[1] / 2.0
-            && p[2] >= 0.0
-            && p[2] < f.size[2]
-        {
+        if f.covers(p[0], p[1]) && p[2] >= 0.0 && p[2] < f.size[2] {
             return Ok(Some(f.kind));
         }
     }

@@ -8,7 +8,7 @@ use envfield_affordance::{
 use envfield_rooms::{
     afford, clear_beneath, implausible, plausible, AccessibleRegion, RegionConfig,
 };
-use envfield_scene::nalgebra::{Isometry3, Vector3};
+use envfield_scene::nalgebra::{Isometry3, Point3, Vector3};
 use envfield_scene::{Furniture, ObjectKind, Primitive, Room, Scene, SceneObject};
 
 fn at(x: f32, y: f32, z: f32) -> Isometry3<f32> {
@@ -245,4 +245,22 @@ fn a_seat_joins_the_region_through_a_sit_down() {
         region.contains([2.0, 2.0, seated]),
         "the seat is joined to the floor's set"
     );
+    // The sit-downs that joined it: each starts standing in the region, ends seated in it
+    // where it says, and every pose of it is valid.
+    assert!(!region.sit_downs.is_empty());
+    for sit in &region.sit_downs {
+        assert!(
+            region.contains(sit.start) && region.contains(sit.seated),
+            "{sit:?}"
+        );
+        let seq = sit.sequence().unwrap();
+        let (first, last) = (seq.frames[0].torso(), seq.frames.last().unwrap().torso());
+        assert!((first - Point3::from(sit.start)).norm() < 1e-4, "{sit:?}");
+        assert!((last - Point3::from(sit.seated)).norm() < 1e-4, "{sit:?}");
+        assert!(sit.seated[2] < sit.start[2] - 0.2, "it sits down: {sit:?}");
+        for (pose, &support) in seq.frames.iter().zip(&seq.supports) {
+            let r = check_pose(&room.scene, pose, support, &config.affordance).unwrap();
+            assert!(r.valid(), "{sit:?}: {r:?}");
+        }
+    }
 }

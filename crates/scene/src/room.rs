@@ -136,6 +136,15 @@ impl Furniture {
     pub fn footprint(&self) -> [f32; 4] {
         footprint(self.center, self.yaw, self.size)
     }
+
+    /// Whether the world point `(x, y)` lies over its (turned) footprint.
+    pub fn covers(&self, x: f32, y: f32) -> bool {
+        // Into its own frame: the footprint centred, width along x, depth along y.
+        let (s, c) = self.yaw.sin_cos();
+        let (dx, dy) = (x - self.center[0], y - self.center[1]);
+        let (lx, ly) = (c * dx + s * dy, -s * dx + c * dy);
+        lx.abs() < self.size[0] / 2.0 && ly.abs() < self.size[1] / 2.0
+    }
 }
 
 fn footprint(center: [f32; 2], yaw: f32, size: [f32; 3]) -> [f32; 4] {
