@@ -202,8 +202,9 @@ fn room_field(
         "room {seed}: learned field, median error {:.3} m, p95 {:.3} m, {:.0} s",
         report.median_err_m, report.p95_err_m, report.train_s
     );
+    // Saved with its region's fingerprint, so a later run knows which region it fits.
     if let (Some(p), 1) = (&args.save_field, args.rooms) {
-        net.save(p)?;
+        net.save_tagged(p, &[(REGION_TAG, key.clone())])?;
     }
     if let Some(p) = &cached {
         let dir = p.parent().context("a folder")?;
