@@ -6,7 +6,7 @@ use envfield_affordance::{
     bones_clear, check_pose, sit_down, standing_pose, AffordanceConfig, Pose, SitConfig, Support,
 };
 use envfield_rooms::{
-    afford, clear_beneath, implausible, plausible, AccessibleRegion, RegionConfig,
+    afford, clear_beneath, implausible, plausible, AccessibleRegion, RegionConfig, SitDown,
 };
 use envfield_scene::nalgebra::{Isometry3, Point3, Vector3};
 use envfield_scene::{Furniture, ObjectKind, Primitive, Room, Scene, SceneObject};
@@ -262,5 +262,35 @@ fn a_seat_joins_the_region_through_a_sit_down() {
             let r = check_pose(&room.scene, pose, support, &config.affordance).unwrap();
             assert!(r.valid(), "{sit:?}: {r:?}");
         }
+    }
+}
+
+#[test]
+fn a_sit_down_off_its_range_or_not_finite_is_an_error() {
+    let sit = SitDown {
+        start: [0.0; 3],
+        seated: [1.0, 1.0, 0.55],
+        seat_height: 0.45,
+        yaw: 0.5,
+    };
+    assert_eq!(sit.sequence().unwrap().frames.len(), 60);
+    let high = SitDown {
+        seat_height: 0.9,
+        ..sit
+    };
+    let e = high.sequence().unwrap_err().to_string();
+    assert!(e.contains("seat height"), "{e}");
+    for bad in [
+        SitDown {
+            seated: [f32::NAN, 1.0, 0.55],
+            ..sit
+        },
+        SitDown {
+            yaw: f32::INFINITY,
+            ..sit
+        },
+    ] {
+        let e = bad.sequence().unwrap_err().to_string();
+        assert!(e.contains("frame 0"), "{e}");
     }
 }
