@@ -91,7 +91,8 @@ struct Args {
     save_field: Option<PathBuf>,
     /// Keep every trained room field in this folder
     /// (`room_field_<seed>_<region>_<steps>.safetensors`: the room, a fingerprint of its
-    /// accessible region and the training steps) and load it from there on the next run, so a
+    /// accessible region and the training's settings, and the training steps) and load it
+    /// from there on the next run, so a
     /// second run of the tables skips the training.
     #[arg(long)]
     fields: Option<PathBuf>,
@@ -141,7 +142,11 @@ fn room_field(
     region: &AccessibleRegion,
 ) -> Result<(FieldNet, Option<f64>)> {
     let generated = args.scene.is_none();
-    let fingerprint = format!("{:016x}", region_key(region));
+    let mut cfg = Field3Config::default();
+    (cfg.steps, cfg.seed) = (args.field_steps, seed);
+    // The region and the training's settings: a field kept under another of either is not
+    // this one.
+    let fingerprint = format!("{:016x}{:08x}", region_key(region), cfg.key() as u32);
     let key = format!("{fingerprint}_{}", args.field_steps);
     let cached = args
         .fields
@@ -187,15 +192,14 @@ fn room_field(
             );
         }
         eprintln!(
-            "room {seed}: the shipped field {} was trained on another region; training one",
+            "room {seed}: the shipped field {} was trained on another region or otherwise; \
+             training one",
             f.display()
         );
     }
     let style = ProgressStyle::with_template("{msg:>24} {bar:30} {pos}/{len} (eta {eta})")?;
     let bar = ProgressBar::new(args.field_steps).with_style(style);
     bar.set_message(format!("room {seed}: 3D field"));
-    let mut cfg = Field3Config::default();
-    (cfg.steps, cfg.seed) = (args.field_steps, seed);
     let (net, report) = train_field3(region, &cfg, None, |s, _, _| bar.set_position(s))?;
     bar.finish_and_clear();
     eprintln!(

@@ -33,9 +33,22 @@ pub struct Field3Config {
     pub mlp: MlpConfig,
     /// The network predicts the detour over the straight line ([`GoalConfig::detour`]).
     pub detour: bool,
+    /// Share of the training goals drawn from the voxels of the region's sit-downs
+    /// ([`AccessibleRegion::sit_downs`]) rather than evenly: the seats are a few percent of a
+    /// room's voxels, and a field that rarely trains on a seated goal does not learn where it
+    /// ends.
+    #[serde(default)]
+    pub sit_goal_share: f32,
+    /// Share of the queries drawn from the accessible voxels within [`NEAR_GOAL`] voxels of
+    /// their goal rather than evenly: the last steps to a goal read the field there.
+    #[serde(default)]
+    pub near_query_share: f32,
     /// Seed of goals, batches and weights.
     pub seed: u64,
 }
+
+/// How far from its goal a near query lies, voxels (along each axis).
+pub const NEAR_GOAL: usize = 4;
 
 impl Default for Field3Config {
     fn default() -> Self {
@@ -54,6 +67,8 @@ impl Default for Field3Config {
                 ..MlpConfig::default()
             },
             detour: true,
+            sit_goal_share: 0.25,
+            near_query_share: 0.25,
             seed: 0,
         }
     }
@@ -123,7 +138,7 @@ pub fn train_field3(
     let mut trainer = trainer_for(config, &targets, checkpoint)?;
     let start = Instant::now();
     while trainer.step() < config.steps {
-        let (batch, wanted) = targets.batch(&voxels, config, trainer.step());
+        let (batch, wanted) = targets.batch(region, &voxels, config, trainer.step());
         let loss = trainer.train_batch(&batch, &wanted)?;
         let done = trainer.step();
         on_step(done, config.steps, loss);
@@ -148,6 +163,15 @@ pub fn train_field3(
 }
 
 impl Field3Config {
+    /// A fingerprint of every setting (FNV-1a of its JSON): a field kept under it was trained
+    /// this way, so a cache of fields can tell when the training changed.
+    pub fn key(&self) -> u64 {
+        let text = serde_json::to_string(self).unwrap_or_default();
+        text.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| {
+            (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3)
+        })
+    }
+
     /// An error naming the first setting that cannot work.
     fn validate(&self) -> Result<()> {
         if self.goals == 0 || self.goals_per_step == 0 || self.queries_per_goal == 0 {
@@ -159,6 +183,22 @@ impl Field3Config {
             return Err(RoomsError::InvalidConfig(format!(
                 "field3: blocked_fraction in [0, 1) (got {})",
                 self.blocked_fraction
+            )));
+        }
+        for (name, v) in [
+            ("sit_goal_share", self.sit_goal_share),
+            ("near_query_share", self.near_query_share),
+        ] {
+            if !(0.0..=1.0).contains(&v) {
+                return Err(RoomsError::InvalidConfig(format!(
+                    "field3: {name} in [0, 1] (got {v})"
+                )));
+            }
+        }
+        if self.blocked_fraction + self.near_query_share > 1.0 {
+            return Err(RoomsError::InvalidConfig(format!(
+                "field3: blocked_fraction + near_query_share at most 1 (got {} + {})",
+                self.blocked_fraction, self.near_query_share
             )));
         }
         Ok(())
@@ -211,7 +251,28 @@ impl Targets {
         config: &Field3Config,
         rng: &mut SplitMix64,
     ) -> Result<Self> {
-        let goals = pick_cells(&voxels.free, config.goals, rng);
+        // The voxels a sit-down passes through, each once: where seated goals lie.
+        let mut sitting: Vec<Cell3> = Vec::new();
+        for sit in &region.sit_downs {
+            for pose in sit.sequence()?.frames {
+                if let Some(c) = region.frame.cell_of(&pose.torso()) {
+                    if region.grid.is_free(c) && !sitting.contains(&c) {
+                        sitting.push(c);
+                    }
+                }
+            }
+        }
+        let from_sits = if sitting.is_empty() {
+            0
+        } else {
+            (config.sit_goal_share * config.goals as f32).round() as usize
+        };
+        let mut goals = pick_cells(&voxels.free, config.goals - from_sits, rng);
+        goals.extend(
+            (0..from_sits)
+                .map(|_| sitting[rng.below(sitting.len())])
+                .collect::<Vec<_>>(),
+        );
         let fields = FastMarching::with_order(Order::Second).solve3_many(&region.grid, &goals)?;
         let longest = fields
             .iter()
@@ -237,7 +298,13 @@ impl Targets {
     /// The batch of training step `step` and its encoded targets: `goals_per_step` goals,
     /// each with `queries_per_goal` voxels (a `blocked_fraction` of them inaccessible), drawn
     /// from a generator seeded by the step, so a resumed run draws the same batches.
-    fn batch(&self, voxels: &Voxels, config: &Field3Config, step: u64) -> (Batch, Vec<f32>) {
+    fn batch(
+        &self,
+        region: &AccessibleRegion,
+        voxels: &Voxels,
+        config: &Field3Config,
+        step: u64,
+    ) -> (Batch, Vec<f32>) {
         let (g, q) = (config.goals_per_step, config.queries_per_goal);
         let mut r = SplitMix64::new(config.seed ^ step.wrapping_mul(0x2545_F491_4F6C_DD1D));
         let mut goals = Vec::with_capacity(3 * g);
@@ -248,10 +315,13 @@ impl Targets {
             let goal = self.goals[k];
             goals.extend([goal.x as f32, goal.y as f32, goal.z as f32]);
             for _ in 0..q {
-                let on_blocked =
-                    !voxels.blocked.is_empty() && r.next_f32() < config.blocked_fraction;
+                let u = r.next_f32();
+                let on_blocked = !voxels.blocked.is_empty() && u < config.blocked_fraction;
+                let near = !on_blocked && u < config.blocked_fraction + config.near_query_share;
                 let c = if on_blocked {
                     voxels.blocked[r.below(voxels.blocked.len())]
+                } else if let Some(c) = near.then(|| near_free(region, goal, &mut r)).flatten() {
+                    c
                 } else {
                     voxels.free[r.below(voxels.free.len())]
                 };
@@ -276,6 +346,20 @@ impl Targets {
         };
         (batch, targets)
     }
+}
+
+/// An accessible voxel within [`NEAR_GOAL`] voxels of `goal` (along each axis), of up to
+/// eight drawn; `None` when none of them is accessible.
+fn near_free(region: &AccessibleRegion, goal: Cell3, r: &mut SplitMix64) -> Option<Cell3> {
+    let reach = 2 * NEAR_GOAL + 1;
+    (0..8).find_map(|_| {
+        let c = Cell3::new(
+            (goal.x + r.below(reach)).checked_sub(NEAR_GOAL)?,
+            (goal.y + r.below(reach)).checked_sub(NEAR_GOAL)?,
+            (goal.z + r.below(reach)).checked_sub(NEAR_GOAL)?,
+        );
+        region.grid.is_free(c).then_some(c)
+    })
 }
 
 /// A new trainer for the targets' network, or the one `checkpoint` holds when it exists

@@ -176,6 +176,47 @@ fn the_learned_field_approaches_the_exact_one() {
     assert!(LearnedField3::new(&net, &other, Cell3::new(1, 1, 1)).is_err());
 }
 
+/// The training's shares are checked by name, and its fingerprint follows every setting.
+#[test]
+fn the_fields_training_refuses_shares_out_of_range_and_fingerprints_its_settings() {
+    let region = box_region([6, 5, 3], 0.1);
+    for (bad, name) in [
+        (
+            Field3Config {
+                sit_goal_share: 1.5,
+                ..Field3Config::default()
+            },
+            "sit_goal_share",
+        ),
+        (
+            Field3Config {
+                near_query_share: f32::NAN,
+                ..Field3Config::default()
+            },
+            "near_query_share",
+        ),
+        (
+            Field3Config {
+                near_query_share: 0.95,
+                ..Field3Config::default()
+            },
+            "blocked_fraction + near_query_share",
+        ),
+    ] {
+        let e = envfield_rooms::train_field3(&region, &bad, None, |_, _, _| {})
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(name), "{e}");
+    }
+    let base = Field3Config::default();
+    let other = Field3Config {
+        near_query_share: 0.0,
+        ..base.clone()
+    };
+    assert_eq!(base.key(), Field3Config::default().key());
+    assert_ne!(base.key(), other.key());
+}
+
 /// The local VAE: it learns from neighbourhoods, samples over the whole room at anchors, keeps
 /// its samples near the anchors' neighbourhoods, and refuses the whole-scene APIs.
 #[test]
