@@ -144,9 +144,13 @@ fn room_field(
     let generated = args.scene.is_none();
     let mut cfg = Field3Config::default();
     (cfg.steps, cfg.seed) = (args.field_steps, seed);
-    // The region and the training's settings: a field kept under another of either is not
-    // this one.
-    let fingerprint = format!("{:016x}{:08x}", region_key(region), cfg.key() as u32);
+    // The region and the training's settings but its steps (which the key names apart): a
+    // field kept under another of either is not this one.
+    let settings = Field3Config {
+        steps: 0,
+        ..cfg.clone()
+    };
+    let fingerprint = format!("{:016x}{:08x}", region_key(region), settings.key() as u32);
     let key = format!("{fingerprint}_{}", args.field_steps);
     let cached = args
         .fields
