@@ -39,8 +39,8 @@ pub struct Field3Config {
     /// ends.
     #[serde(default)]
     pub sit_goal_share: f32,
-    /// Share of the queries drawn from the accessible voxels within [`NEAR_GOAL`] voxels of
-    /// their goal rather than evenly: the last steps to a goal read the field there.
+    /// Share of the queries drawn from the accessible voxels within 4 voxels of their goal
+    /// (along each axis) rather than evenly: the last steps to a goal read the field there.
     #[serde(default)]
     pub near_query_share: f32,
     /// Seed of goals, batches and weights.
@@ -48,7 +48,7 @@ pub struct Field3Config {
 }
 
 /// How far from its goal a near query lies, voxels (along each axis).
-pub const NEAR_GOAL: usize = 4;
+const NEAR_GOAL: usize = 4;
 
 impl Default for Field3Config {
     fn default() -> Self {
