@@ -134,12 +134,18 @@ pub fn middle_goal(region: &AccessibleRegion) -> Point3m {
 /// A fingerprint of the region's voxels (FNV-1a over its shape and accessible voxels), so a
 /// kept field is loaded again only for the very region it was trained on.
 pub fn region_key(region: &AccessibleRegion) -> u64 {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
     let shape = region.frame.shape;
-    for v in shape.iter().chain(region.free_indices()) {
-        for b in (*v as u64).to_le_bytes() {
-            h = (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3);
-        }
-    }
-    h
+    fnv1a(
+        shape
+            .iter()
+            .chain(region.free_indices())
+            .flat_map(|v| (*v as u64).to_le_bytes()),
+    )
+}
+
+/// FNV-1a (64-bit) of `bytes`: the fingerprints of kept fields.
+pub(crate) fn fnv1a(bytes: impl IntoIterator<Item = u8>) -> u64 {
+    bytes.into_iter().fold(0xcbf2_9ce4_8422_2325, |h, b| {
+        (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3)
+    })
 }

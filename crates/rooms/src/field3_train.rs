@@ -166,10 +166,7 @@ impl Field3Config {
     /// A fingerprint of every setting (FNV-1a of its JSON): a field kept under it was trained
     /// this way, so a cache of fields can tell when the training changed.
     pub fn key(&self) -> u64 {
-        let text = serde_json::to_string(self).unwrap_or_default();
-        text.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| {
-            (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3)
-        })
+        crate::draw::fnv1a(serde_json::to_string(self).unwrap_or_default().into_bytes())
     }
 
     /// An error naming the first setting that cannot work.
@@ -268,11 +265,7 @@ impl Targets {
             (config.sit_goal_share * config.goals as f32).round() as usize
         };
         let mut goals = pick_cells(&voxels.free, config.goals - from_sits, rng);
-        goals.extend(
-            (0..from_sits)
-                .map(|_| sitting[rng.below(sitting.len())])
-                .collect::<Vec<_>>(),
-        );
+        goals.extend((0..from_sits).map(|_| sitting[rng.below(sitting.len())]));
         let fields = FastMarching::with_order(Order::Second).solve3_many(&region.grid, &goals)?;
         let longest = fields
             .iter()

@@ -621,9 +621,10 @@ impl AccessibleRegion {
     }
 
     /// The region of `kept`, each neighbour voxel of a sample's voxel joining when `joins`
-    /// says so of its centre (asked once, for all of them), and the voxels along each chain of
-    /// torso locations `links` gives (for the lattice, the voxels so far and the samples)
-    /// joining too, before the largest connected set is kept.
+    /// says so of its centre (asked once, for all of them), and the voxels along the torsos of
+    /// each sit-down `links` gives (for the lattice, the voxels so far and the samples)
+    /// joining too, before the largest connected set is kept; the sit-downs that end in it
+    /// are the region's.
     fn build(
         scene: &Scene,
         kept: Vec<[f32; 3]>,
