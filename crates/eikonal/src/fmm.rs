@@ -110,7 +110,7 @@ pub struct SolveOptions3<'a> {
     pub past_stop: f32,
 }
 
-fn check_band(past_stop: f32) -> Result<()> {
+pub(crate) fn check_band(past_stop: f32) -> Result<()> {
     if past_stop.is_nan() || past_stop < 0.0 {
         return Err(EikonalError::InvalidConfig(format!(
             "past_stop must be >= 0 (infinite marches on to the end), got {past_stop}"
@@ -154,7 +154,7 @@ impl FastMarching {
 
     /// With unit speed no distance exceeds `spacing x cells x 2`: refuse a spacing for which
     /// that bound leaves f32's range (a distance past it would read as unreachable).
-    fn check_range(&self, cells: usize) -> Result<()> {
+    pub(crate) fn check_range(&self, cells: usize) -> Result<()> {
         if self.spacing as f64 * cells as f64 * 2.0 > f32::MAX as f64 {
             return Err(EikonalError::InvalidConfig(format!(
                 "spacing {} is too large for a grid of {cells} cells: distances would overflow \
@@ -165,7 +165,7 @@ impl FastMarching {
         Ok(())
     }
 
-    fn validate(&self) -> Result<()> {
+    pub(crate) fn validate(&self) -> Result<()> {
         if !(self.spacing.is_finite() && self.spacing > 0.0) {
             return Err(EikonalError::InvalidConfig(format!(
                 "spacing must be finite and positive, got {}",
@@ -225,7 +225,7 @@ impl FastMarching {
         let src = check_sources(
             sources,
             |s| grid.index(s),
-            grid.obstacles(),
+            |i| grid.obstacles()[i],
             options.speed.map(Field2::values),
             &shape,
             |s, _| [s.row, s.col],
@@ -292,7 +292,7 @@ impl FastMarching {
         let src = check_sources(
             sources,
             |s| grid.index(s),
-            grid.obstacles(),
+            |i| grid.obstacles()[i],
             options.speed.map(Field3::values),
             &shape,
             |s, _| [s.x, s.y, s.z],

@@ -38,7 +38,7 @@ fn source_indices<C: Copy + std::fmt::Display>(
     if !obstacles.contains(&false) {
         return Err(EikonalError::NoFreeCell);
     }
-    check_sources(sources, index, obstacles, None, shape, |_, i| i)
+    check_sources(sources, index, |i| obstacles[i], None, shape, |_, i| i)
 }
 
 /// Dijkstra over cells: `neighbours(i, push)` calls `push(j, step_cost)` for each move from `i`.

@@ -31,6 +31,7 @@
 
 mod error;
 mod fmm;
+mod free;
 mod graph;
 mod heap;
 mod march;
@@ -38,4 +39,5 @@ mod sources;
 
 pub use error::{EikonalError, Result};
 pub use fmm::{FastMarching, Order, SolveOptions2, SolveOptions3};
+pub use free::FreeCells3;
 pub use graph::{bfs2, bfs3, dijkstra2, dijkstra3, GraphDistance};

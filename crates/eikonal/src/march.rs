@@ -87,7 +87,44 @@ impl<const N: usize> Lattice<N> {
     }
 }
 
-struct Marcher<const N: usize, const ARITY: usize> {
+/// How the marcher finds a cell's neighbours among its records.
+trait Links<const N: usize> {
+    /// The record of `q`'s neighbour along axis `k`, above it (`up`) or below: a blocked
+    /// record where it has none. `q` is a real cell, or (dense lattices) a cell of the
+    /// first padding layer.
+    fn next(&self, q: usize, k: usize, up: bool) -> usize;
+}
+
+/// A dense padded lattice: neighbours are a stride apart, and the two padding layers answer
+/// for the cells a real cell's stencil reaches beyond the grid.
+struct Strides<const N: usize>([usize; N]);
+
+impl<const N: usize> Links<N> for Strides<N> {
+    #[inline(always)]
+    fn next(&self, q: usize, k: usize, up: bool) -> usize {
+        if up {
+            q + self.0[k]
+        } else {
+            q - self.0[k]
+        }
+    }
+}
+
+/// The free cells of a 3D grid alone (`FreeCells3`): each record's six neighbours looked up
+/// in a table, the last record a blocked one that is its own neighbour everywhere.
+struct Table<'a>(&'a [[u32; 6]]);
+
+impl Links<3> for Table<'_> {
+    #[inline(always)]
+    fn next(&self, q: usize, k: usize, up: bool) -> usize {
+        self.0[q][2 * k + usize::from(up)] as usize
+    }
+}
+
+struct Marcher<const N: usize, const ARITY: usize, L: Links<N>> {
+    /// Where each record's neighbours are.
+    links: L,
+    /// The dense lattice's strides, for the prefetches (empty table: none).
     strides: [usize; N],
     /// Per cell: the accepted value (infinity for every other cell, so the stencil reads values
     /// without looking at the state) and the state tag. f32 keeps the working set small (the
@@ -104,7 +141,7 @@ struct Marcher<const N: usize, const ARITY: usize> {
     heap: IndexedHeap<ARITY>,
 }
 
-impl<const N: usize, const ARITY: usize> Marcher<N, ARITY> {
+impl<const N: usize, const ARITY: usize, L: Links<N>> Marcher<N, ARITY, L> {
     #[inline]
     fn tau(&self, i: usize) -> f64 {
         match &self.tau {
@@ -177,17 +214,22 @@ impl<const N: usize, const ARITY: usize> Marcher<N, ARITY> {
         let mut a = [f64::INFINITY; N];
         let mut far = [0usize; N];
         for k in 0..N {
-            let s = self.strides[k];
-            // SAFETY: `q` is a real cell, so `q ± 2s` lies inside the two-cell padding.
+            let (below, above) = (self.links.next(q, k, false), self.links.next(q, k, true));
+            // SAFETY: `q` is a real cell, so its neighbours and theirs are records (the two-cell
+            // padding of a dense lattice; a table's blocked record).
             let (a_lo, a_hi) = unsafe {
                 (
-                    recs.get_unchecked(q - s).known as f64,
-                    recs.get_unchecked(q + s).known as f64,
+                    recs.get_unchecked(below).known as f64,
+                    recs.get_unchecked(above).known as f64,
                 )
             };
             let lo = a_lo <= a_hi;
+            far[k] = if lo {
+                self.links.next(below, k, false)
+            } else {
+                self.links.next(above, k, true)
+            };
             a[k] = if lo { a_lo } else { a_hi };
-            far[k] = if lo { q - 2 * s } else { q + 2 * s };
         }
         let min_a1 = a.iter().fold(f64::INFINITY, |m, &x| m.min(x));
         debug_assert!(
@@ -275,19 +317,19 @@ impl<const N: usize, const ARITY: usize> Marcher<N, ARITY> {
         let _ = c;
     }
 
-    /// The tentative value of cell `q` when its one accepted neighbour is `q - step`: what
-    /// [`Marcher::estimate`] computes with one finite upwind term, operation for operation,
-    /// without reading the other axes.
+    /// The tentative value of cell `q` when its one accepted neighbour is `i`, its neighbour
+    /// along axis `k` (below `q` when `up`): what [`Marcher::estimate`] computes with one
+    /// finite upwind term, operation for operation, without reading the other axes.
     #[inline(always)]
-    fn estimate_single(&self, q: usize, step: isize) -> f64 {
+    fn estimate_single(&self, q: usize, i: usize, k: usize, up: bool) -> f64 {
         let tau = self.tau(q);
         let recs = &self.recs[..];
-        // SAFETY: `q` is a real cell, so `q ± 2s` lies inside the two-cell padding.
-        let a = unsafe { recs.get_unchecked(q.wrapping_add_signed(-step)).known as f64 };
+        // SAFETY: `i` is a real cell, a record.
+        let a = unsafe { recs.get_unchecked(i).known as f64 };
         let first = a + tau;
         if self.second_order {
-            // SAFETY: as above.
-            let a2 = unsafe { recs.get_unchecked(q.wrapping_add_signed(-2 * step)).known as f64 };
+            // SAFETY: the neighbour of a real cell is a record (padding or the blocked one).
+            let a2 = unsafe { recs.get_unchecked(self.links.next(i, k, !up)).known as f64 };
             if a2 <= a {
                 let u = (4.0 * a - a2) * (1.0 / 3.0) + tau * (2.0 / 3.0);
                 if u >= a {
@@ -302,10 +344,8 @@ impl<const N: usize, const ARITY: usize> Marcher<N, ARITY> {
     /// must give the full estimate's value bit for bit.
     #[cfg(debug_assertions)]
     fn check_single(&self, q: usize, u: f32) {
-        let accepted = self
-            .strides
-            .iter()
-            .flat_map(|&s| [q - s, q + s])
+        let accepted = (0..N)
+            .flat_map(|k| [self.links.next(q, k, false), self.links.next(q, k, true)])
             .filter(|&n| self.recs[n].tag == KNOWN)
             .count();
         if accepted == 1 {
@@ -317,17 +357,16 @@ impl<const N: usize, const ARITY: usize> Marcher<N, ARITY> {
     #[inline(always)]
     fn update_neighbours(&mut self, i: usize) {
         for k in 0..N {
-            let s = self.strides[k] as isize;
-            for step in [-s, s] {
-                let q = i.wrapping_add_signed(step);
-                // SAFETY: neighbours of a real cell lie inside the padding.
+            for up in [false, true] {
+                let q = self.links.next(i, k, up);
+                // SAFETY: neighbours of a real cell are records.
                 let tag = unsafe { self.recs.get_unchecked(q).tag };
                 if tag == FAR {
                     // Every accepted cell updates its open neighbours when it is accepted, so
                     // a cell still far has no accepted neighbour but `i` (source cells, frozen
                     // together, are the exception: each of them updates its neighbours in turn
                     // afterwards, and the last update, a full one, sees them all).
-                    let u = self.estimate_single(q, step) as f32;
+                    let u = self.estimate_single(q, i, k, up) as f32;
                     #[cfg(debug_assertions)]
                     self.check_single(q, u);
                     self.heap.set(u, q as u32, &mut self.recs);
@@ -417,7 +456,8 @@ fn march_with<const N: usize, const ARITY: usize>(p: &Problem<'_, N>, lat: Latti
             }
         });
     }
-    let mut m = Marcher::<N, ARITY> {
+    let mut m = Marcher::<N, ARITY, _> {
+        links: Strides(lat.strides),
         strides: lat.strides,
         recs,
         tau,
@@ -426,75 +466,7 @@ fn march_with<const N: usize, const ARITY: usize>(p: &Problem<'_, N>, lat: Latti
         prefetch: lat.len >= LARGE_GRID,
         heap: IndexedHeap::new(),
     };
-
-    // Exact initialisation around each source.
-    let r = p.source_radius as isize;
-    let mut frozen = Vec::new();
-    for src in p.sources {
-        let si = lat.padded(*src);
-        let side = 2 * r + 1;
-        for code in 0..side.pow(N as u32) {
-            let mut off = [0isize; N];
-            let mut rest = code;
-            for k in (0..N).rev() {
-                off[k] = rest % side - r;
-                rest /= side;
-            }
-            let mut cell = [0usize; N];
-            let mut inside = true;
-            for k in 0..N {
-                let c = src[k] as isize + off[k];
-                inside &= c >= 0 && (c as usize) < p.dims[k];
-                cell[k] = c.max(0) as usize;
-            }
-            if inside && line_of_sight(&m.recs, &lat, *src, off) {
-                let ci = lat.padded(cell);
-                let len = off.iter().map(|&o| (o * o) as f64).sum::<f64>().sqrt();
-                let t = (len * 0.5 * (m.tau(si) + m.tau(ci))) as f32;
-                if t < m.recs[ci].known {
-                    m.recs[ci].known = t;
-                }
-                frozen.push(ci);
-            }
-        }
-    }
-    for &i in &frozen {
-        m.recs[i].tag = KNOWN;
-    }
-    let stop = p.stop_at.map(|c| lat.padded(c));
-    let band = p.past_stop > 0.0;
-    // A stop cell among the sources is known already: the march ends there, or its band
-    // counts from its value.
-    let stop_known = stop.filter(|&s| m.recs[s].tag == KNOWN);
-    let mut limit = stop_known.map_or(f32::INFINITY, |s| m.recs[s].known + p.past_stop);
-    if band || stop_known.is_none() {
-        for &i in &frozen {
-            m.update_neighbours(i);
-        }
-        while let Some(entry) = m.heap.pop(&mut m.recs) {
-            let (value, i) = unpack(entry);
-            if value > limit {
-                break;
-            }
-            let i = i as usize;
-            m.recs[i] = Rec {
-                known: value,
-                tag: KNOWN,
-            };
-            if Some(i) == stop {
-                if !band {
-                    break;
-                }
-                limit = value + p.past_stop;
-            }
-            if m.prefetch {
-                if let Some(next) = m.heap.peek_cell() {
-                    m.prefetch_around(next as usize);
-                }
-            }
-            m.update_neighbours(i);
-        }
-    }
+    m.run(p, |cell| lat.padded(cell));
 
     // Rows come in C order, so the output is written once, front to back.
     let mut out = Vec::with_capacity(p.obstacles.len());
@@ -508,10 +480,128 @@ fn march_with<const N: usize, const ARITY: usize>(p: &Problem<'_, N>, lat: Latti
     out
 }
 
+/// Runs fast marching over the free cells of a 3D grid alone and returns their values in
+/// `links`' order (infinity where not reached). `links` holds each free cell's six neighbours
+/// (below and above along x, y, z) as record numbers, the last entry a blocked cell that is
+/// its own neighbour everywhere; `record` maps a cell of the grid to its record (the blocked
+/// one for an obstacle). The same arithmetic as [`march`] in the same order, so the values
+/// are [`march`]'s bit for bit.
+pub(crate) fn march_free(
+    p: &Problem<'_, 3>,
+    links: &[[u32; 6]],
+    record: impl Fn([usize; 3]) -> usize,
+) -> Vec<f32> {
+    debug_assert!(p.speed.is_none(), "the free cells' march is for unit speed");
+    let n = links.len();
+    let mut recs = SPARE.take();
+    recs.clear();
+    recs.resize(
+        n,
+        Rec {
+            known: f32::INFINITY,
+            tag: FAR,
+        },
+    );
+    recs[n - 1].tag = BLOCKED;
+    let mut m = Marcher::<3, 2, _> {
+        links: Table(links),
+        strides: [0; 3],
+        recs,
+        tau: None,
+        tau_uniform: p.spacing,
+        second_order: p.second_order,
+        prefetch: false,
+        heap: IndexedHeap::new(),
+    };
+    m.run(p, record);
+    let out = m.recs[..n - 1].iter().map(|r| r.known).collect();
+    if m.recs.len() <= SPARE_MAX {
+        SPARE.set(m.recs);
+    }
+    out
+}
+
+impl<const N: usize, const ARITY: usize, L: Links<N>> Marcher<N, ARITY, L> {
+    /// Initialises the records around `p`'s sources and marches until the heap is empty, the
+    /// stop cell is accepted or its band is passed. `record` maps a cell of the grid to its
+    /// record.
+    fn run(&mut self, p: &Problem<'_, N>, record: impl Fn([usize; N]) -> usize) {
+        let m = self;
+        // Exact initialisation around each source.
+        let r = p.source_radius as isize;
+        let mut frozen = Vec::new();
+        for src in p.sources {
+            let si = record(*src);
+            let side = 2 * r + 1;
+            for code in 0..side.pow(N as u32) {
+                let mut off = [0isize; N];
+                let mut rest = code;
+                for k in (0..N).rev() {
+                    off[k] = rest % side - r;
+                    rest /= side;
+                }
+                let mut cell = [0usize; N];
+                let mut inside = true;
+                for k in 0..N {
+                    let c = src[k] as isize + off[k];
+                    inside &= c >= 0 && (c as usize) < p.dims[k];
+                    cell[k] = c.max(0) as usize;
+                }
+                if inside && line_of_sight(&m.recs, &record, *src, off) {
+                    let ci = record(cell);
+                    let len = off.iter().map(|&o| (o * o) as f64).sum::<f64>().sqrt();
+                    let t = (len * 0.5 * (m.tau(si) + m.tau(ci))) as f32;
+                    if t < m.recs[ci].known {
+                        m.recs[ci].known = t;
+                    }
+                    frozen.push(ci);
+                }
+            }
+        }
+        for &i in &frozen {
+            m.recs[i].tag = KNOWN;
+        }
+        let stop = p.stop_at.map(&record);
+        let band = p.past_stop > 0.0;
+        // A stop cell among the sources is known already: the march ends there, or its band
+        // counts from its value.
+        let stop_known = stop.filter(|&s| m.recs[s].tag == KNOWN);
+        let mut limit = stop_known.map_or(f32::INFINITY, |s| m.recs[s].known + p.past_stop);
+        if band || stop_known.is_none() {
+            for &i in &frozen {
+                m.update_neighbours(i);
+            }
+            while let Some(entry) = m.heap.pop(&mut m.recs) {
+                let (value, i) = unpack(entry);
+                if value > limit {
+                    break;
+                }
+                let i = i as usize;
+                m.recs[i] = Rec {
+                    known: value,
+                    tag: KNOWN,
+                };
+                if Some(i) == stop {
+                    if !band {
+                        break;
+                    }
+                    limit = value + p.past_stop;
+                }
+                if m.prefetch {
+                    if let Some(next) = m.heap.peek_cell() {
+                        m.prefetch_around(next as usize);
+                    }
+                }
+                m.update_neighbours(i);
+            }
+        }
+    }
+}
+
 /// Whether every cell of the box between `src` and `src + off` is enterable.
 fn line_of_sight<const N: usize>(
     recs: &[Rec],
-    lat: &Lattice<N>,
+    record: impl Fn([usize; N]) -> usize,
     src: [usize; N],
     off: [isize; N],
 ) -> bool {
@@ -524,7 +614,7 @@ fn line_of_sight<const N: usize>(
     }
     let mut idx = lo;
     loop {
-        if recs[lat.padded(idx)].tag == BLOCKED {
+        if recs[record(idx)].tag == BLOCKED {
             return false;
         }
         let mut k = N;

@@ -5,7 +5,7 @@ use crate::{EikonalError, Result};
 pub(crate) fn check_sources<C: Copy + std::fmt::Display, T>(
     sources: &[C],
     index: impl Fn(C) -> Option<usize>,
-    obstacles: &[bool],
+    blocked: impl Fn(usize) -> bool,
     speed: Option<&[f32]>,
     shape: &str,
     keep: impl Fn(C, usize) -> T,
@@ -20,7 +20,7 @@ pub(crate) fn check_sources<C: Copy + std::fmt::Display, T>(
                 cell: s.to_string(),
                 shape: shape.to_string(),
             })?;
-            if obstacles[i] || speed.is_some_and(|v| v[i] == 0.0) {
+            if blocked(i) || speed.is_some_and(|v| v[i] == 0.0) {
                 return Err(EikonalError::SourceOnObstacle {
                     cell: s.to_string(),
                 });

@@ -217,47 +217,64 @@ impl Field3 {
     /// # Errors
     /// As [`Field3::sample`].
     pub fn sample_finite(&self, p: Point3) -> Result<f32> {
-        let corners = self.corners(p)?;
-        let [nx, ny, nz] = self.shape;
-        // Coordinates are >= 0 (checked above): half up is f32::round here, without libm.
-        let round = |v: f32, n: usize| ((v + 0.5) as usize).min(n - 1);
-        let holder = self.values[(round(p.x, nx) * ny + round(p.y, ny)) * nz + round(p.z, nz)];
-        if !holder.is_finite() {
-            return Ok(f32::INFINITY);
-        }
-        let (acc, weight) = corners
-            .iter()
-            .filter(|(v, w)| *w > 0.0 && v.is_finite())
-            .fold((0.0f32, 0.0f32), |(a, t), (v, w)| (a + v * w, t + w));
-        // The holding cell is finite and weighs at least 1/8.
-        Ok(acc / weight)
+        sample_finite_by(self.shape, p, |i| self.values[i])
     }
 
     /// The eight (value, trilinear weight) corners around `p`.
     fn corners(&self, p: Point3) -> Result<[(f32, f32); 8]> {
-        let [nx, ny, nz] = self.shape;
-        check_point("x", p.x, nx)?;
-        check_point("y", p.y, ny)?;
-        check_point("z", p.z, nz)?;
-        let (x0, x1, fx) = split(p.x, nx);
-        let (y0, y1, fy) = split(p.y, ny);
-        let (z0, z1, fz) = split(p.z, nz);
-        let at = |x: usize, y: usize, z: usize| self.values[(x * ny + y) * nz + z];
-        let mut corners = [(0.0f32, 0.0f32); 8];
-        for (k, corner) in corners.iter_mut().enumerate() {
-            let (bx, by, bz) = (k & 4 != 0, k & 2 != 0, k & 1 != 0);
-            let w = (if bx { fx } else { 1.0 - fx })
-                * (if by { fy } else { 1.0 - fy })
-                * (if bz { fz } else { 1.0 - fz });
-            let v = at(
-                if bx { x1 } else { x0 },
-                if by { y1 } else { y0 },
-                if bz { z1 } else { z0 },
-            );
-            *corner = (v, w);
-        }
-        Ok(corners)
+        corners_by(self.shape, p, |i| self.values[i])
     }
+}
+
+/// [`Field3::sample_finite`] over a field of `shape` whose value at C-order index `i` is
+/// `at(i)`: for fields stored otherwise than as a dense array (the values of a region's free
+/// voxels alone), with the same arithmetic.
+///
+/// # Errors
+/// As [`Field3::sample`].
+#[inline]
+pub fn sample_finite_by(shape: [usize; 3], p: Point3, at: impl Fn(usize) -> f32) -> Result<f32> {
+    let corners = corners_by(shape, p, &at)?;
+    let [nx, ny, nz] = shape;
+    // Coordinates are >= 0 (checked above): half up is f32::round here, without libm.
+    let round = |v: f32, n: usize| ((v + 0.5) as usize).min(n - 1);
+    let holder = at((round(p.x, nx) * ny + round(p.y, ny)) * nz + round(p.z, nz));
+    if !holder.is_finite() {
+        return Ok(f32::INFINITY);
+    }
+    let (acc, weight) = corners
+        .iter()
+        .filter(|(v, w)| *w > 0.0 && v.is_finite())
+        .fold((0.0f32, 0.0f32), |(a, t), (v, w)| (a + v * w, t + w));
+    // The holding cell is finite and weighs at least 1/8.
+    Ok(acc / weight)
+}
+
+/// The eight (value, trilinear weight) corners around `p` in a field of `shape` read by `at`.
+#[inline]
+fn corners_by(shape: [usize; 3], p: Point3, at: impl Fn(usize) -> f32) -> Result<[(f32, f32); 8]> {
+    let [nx, ny, nz] = shape;
+    check_point("x", p.x, nx)?;
+    check_point("y", p.y, ny)?;
+    check_point("z", p.z, nz)?;
+    let (x0, x1, fx) = split(p.x, nx);
+    let (y0, y1, fy) = split(p.y, ny);
+    let (z0, z1, fz) = split(p.z, nz);
+    let at = |x: usize, y: usize, z: usize| at((x * ny + y) * nz + z);
+    let mut corners = [(0.0f32, 0.0f32); 8];
+    for (k, corner) in corners.iter_mut().enumerate() {
+        let (bx, by, bz) = (k & 4 != 0, k & 2 != 0, k & 1 != 0);
+        let w = (if bx { fx } else { 1.0 - fx })
+            * (if by { fy } else { 1.0 - fy })
+            * (if bz { fz } else { 1.0 - fz });
+        let v = at(
+            if bx { x1 } else { x0 },
+            if by { y1 } else { y0 },
+            if bz { z1 } else { z0 },
+        );
+        *corner = (v, w);
+    }
+    Ok(corners)
 }
 
 #[cfg(test)]

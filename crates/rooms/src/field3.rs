@@ -5,8 +5,9 @@
 //! fast marching, or one batched network pass), then read by interpolation at every step.
 
 use crate::{AccessibleRegion, Result, RoomsError};
-use envfield_eikonal::{FastMarching, Order, SolveOptions3};
-use envfield_grid::{Cell3, ContinuousField3, Field3, Point3, Point3m};
+use envfield_eikonal::{FastMarching, FreeCells3, Order, SolveOptions3};
+use envfield_grid::{sample_finite_by, Cell3, ContinuousField3, Field3, Point3, Point3m};
+use std::sync::Arc;
 use envfield_nets::{Batch, FieldNet, ModelConfig};
 use envfield_scene::VoxelFrame;
 
@@ -39,7 +40,10 @@ fn to_voxel(frame: &VoxelFrame, p: Point3m) -> envfield_grid::Result<Point3> {
 /// inaccessible one.
 #[derive(Clone, Debug)]
 pub struct VoxelField3 {
-    metres: Field3,
+    /// Metres at each accessible voxel, in `cells`' numbering.
+    metres: Vec<f32>,
+    /// The region's accessible voxels.
+    cells: Arc<FreeCells3>,
     frame: VoxelFrame,
     goal: Cell3,
 }
@@ -99,23 +103,41 @@ impl VoxelField3 {
                 "goal voxel {goal:?} is outside the accessible region"
             )));
         }
-        // Marched in metres: no second pass over the whole box to scale it.
+        // Marched in metres (no second pass to scale it), over the accessible voxels alone:
+        // a room's region fills a few percent of its box.
         let fmm = FastMarching {
             order: Order::Second,
             spacing: region.frame.voxel,
             ..FastMarching::default()
         };
-        let metres = fmm.solve3_with(&region.grid, &[goal], options)?;
+        let cells = region.free_cells()?;
+        let metres = fmm.solve3_free(&cells, &[goal], options)?;
         Ok(Self {
             metres,
+            cells,
             frame: region.frame,
             goal,
         })
     }
 
-    /// The values at voxel centres, metres.
-    pub fn voxels(&self) -> &Field3 {
-        &self.metres
+    /// The value at voxel `cell`'s centre, metres: infinite outside the region (or, for a
+    /// field marched [`VoxelField3::toward`] a start, beyond its band).
+    pub fn at(&self, cell: Cell3) -> f32 {
+        self.cells
+            .number(cell)
+            .map_or(f32::INFINITY, |k| self.metres[k])
+    }
+
+    /// The values at every voxel centre of the lattice (infinite outside the region), metres.
+    ///
+    /// # Errors
+    /// [`RoomsError::Grid`] for a lattice too large to hold in one array.
+    pub fn voxels(&self) -> Result<Field3> {
+        let mut all = vec![f32::INFINITY; self.frame.shape.iter().product()];
+        for (&i, &v) in self.cells.indices().iter().zip(&self.metres) {
+            all[i as usize] = v;
+        }
+        Ok(Field3::new(self.frame.shape, all)?)
     }
 
     /// The goal voxel.
@@ -123,9 +145,10 @@ impl VoxelField3 {
         self.goal
     }
 
-    /// Bytes of the table.
+    /// Bytes of the table (a value per accessible voxel; the numbering of the voxels is the
+    /// region's, [`FreeCells3::bytes`]).
     pub fn bytes(&self) -> usize {
-        std::mem::size_of_val(self.metres.values())
+        std::mem::size_of_val(&self.metres[..])
     }
 }
 
@@ -134,7 +157,12 @@ impl ContinuousField3 for VoxelField3 {
         // Over the accessible corners: plain trilinear weighting would make every point within
         // half a voxel of the region's faces infinite, and a torso standing in an accessible
         // voxel near a wall could neither be reached nor left.
-        self.metres.sample_finite(to_voxel(&self.frame, p)?)
+        let q = to_voxel(&self.frame, p)?;
+        sample_finite_by(self.frame.shape, q, |i| {
+            self.cells
+                .number_at(i)
+                .map_or(f32::INFINITY, |k| self.metres[k])
+        })
     }
 
     /// Central differences of the trilinear interpolant over half a voxel.
@@ -213,20 +241,21 @@ impl<'a> LearnedField3<'a> {
                 self.frame.shape, region.frame.shape
             )));
         }
-        let free = region.free_indices();
-        let mut queries = Vec::with_capacity(3 * free.len());
-        for &i in free {
-            let c = region.grid.cell(i);
+        let cells = region.free_cells()?;
+        let mut queries = Vec::with_capacity(3 * cells.len());
+        for &i in cells.indices() {
+            let c = region.grid.cell(i as usize);
             queries.extend([c.x as f32, c.y as f32, c.z as f32]);
         }
         let raw = self.net.predict_encoded(&self.batch_of(queries))?;
         let encoding = self.net.config().encoding();
-        let mut values = vec![f32::INFINITY; region.grid.len()];
-        for (&i, &t) in free.iter().zip(&raw) {
-            values[i] = encoding.decode(t) * self.frame.voxel;
-        }
+        let metres = raw
+            .iter()
+            .map(|&t| encoding.decode(t) * self.frame.voxel)
+            .collect();
         Ok(VoxelField3 {
-            metres: Field3::new(self.frame.shape, values)?,
+            metres,
+            cells,
             frame: self.frame,
             goal: self.goal,
         })

@@ -421,7 +421,7 @@ fn held_out_report(
             .collect();
         let predicted = learned.values(&points)?;
         for (c, p) in queries.iter().zip(predicted) {
-            let e = exact.voxels().get(*c).unwrap_or(f32::INFINITY);
+            let e = exact.at(*c);
             if !e.is_finite() {
                 continue;
             }

@@ -29,6 +29,7 @@ use envfield_affordance::{
     bones_clear, check_pose, lie_down, sit_down, standing_pose, AffordanceConfig, Joint, LieConfig,
     Pose, PoseSequence, SitConfig, Support,
 };
+use envfield_eikonal::FreeCells3;
 use envfield_grid::{Cell3, Field2, Grid3, HeatMapStyle};
 use envfield_scene::nalgebra::{Point3, Vector3};
 use envfield_scene::{ObjectKind, Room, Scene, SignedDistance, VoxelFrame};
@@ -517,6 +518,8 @@ pub struct AccessibleRegion {
     pub sit_downs: Vec<SitDown>,
     /// The accessible voxels' indices, made on first use.
     free: std::sync::OnceLock<Vec<usize>>,
+    /// The accessible voxels numbered and linked for fast marching, made on first use.
+    cells: std::sync::OnceLock<std::sync::Arc<FreeCells3>>,
 }
 
 impl AccessibleRegion {
@@ -550,7 +553,24 @@ impl AccessibleRegion {
             components,
             sit_downs: Vec::new(),
             free: std::sync::OnceLock::new(),
+            cells: std::sync::OnceLock::new(),
         })
+    }
+
+    /// The accessible voxels numbered in C order and linked to their neighbours, made once
+    /// (on first use) and shared by every field of the region: fast marching over them
+    /// ([`FastMarching::solve3_free`](envfield_eikonal::FastMarching::solve3_free)) costs
+    /// the voxels it reaches, not the region's box, and a [`crate::VoxelField3`] keeps a
+    /// value per accessible voxel alone.
+    ///
+    /// # Errors
+    /// [`RoomsError::Eikonal`] for a lattice too large to march.
+    pub fn free_cells(&self) -> Result<std::sync::Arc<FreeCells3>> {
+        if let Some(cells) = self.cells.get() {
+            return Ok(cells.clone());
+        }
+        let cells = std::sync::Arc::new(FreeCells3::new(&self.grid)?);
+        Ok(self.cells.get_or_init(|| cells).clone())
     }
 
     /// The accessible voxels' indices (C order).

@@ -132,15 +132,11 @@ impl SignedDistance for DistanceGrid {
             base[a] = b;
             frac[a] = if self.shape[a] > 1 { c - b as f32 } else { 0.0 };
         }
+        // Every axis has at least two samples (`new`), so `base + 1` lies inside the grid.
         let [_, sy, sz] = self.shape;
-        let at = |x: usize, y: usize, z: usize| {
-            let (x, y, z) = (
-                (base[0] + x).min(self.shape[0] - 1),
-                (base[1] + y).min(sy - 1),
-                (base[2] + z).min(sz - 1),
-            );
-            self.values[(x * sy + y) * sz + z]
-        };
+        let (dx, dy) = (sy * sz, sz);
+        let i = (base[0] * sy + base[1]) * sz + base[2];
+        let at = |x: usize, y: usize, z: usize| self.values[i + x * dx + y * dy + z];
         let lerp = |a: f32, b: f32, t: f32| a + (b - a) * t;
         let mut v = [0f32; 4];
         for (k, v) in v.iter_mut().enumerate() {
@@ -149,6 +145,10 @@ impl SignedDistance for DistanceGrid {
         }
         let v0 = lerp(v[0], v[1], frac[1]);
         let v1 = lerp(v[2], v[3], frac[1]);
+        // Inside the box (nearly every query) there is no distance to it to add.
+        if outside == 0.0 {
+            return Ok(lerp(v0, v1, frac[0]));
+        }
         Ok(lerp(v0, v1, frac[0]) + outside.sqrt())
     }
 }

@@ -108,39 +108,48 @@ impl FieldSearch3 {
         let dirs = directions26();
         let s = self.step;
         let key = |p: Point3m| lattice_key(p, 0.5 * s);
-        // Points on the open list: position, parent, depth (the index along its chain) and
-        // whether the filter has passed it (the start needs no pass).
-        let mut nodes: Vec<Node> = vec![Node {
-            at: start,
-            parent: usize::MAX,
-            depth: 0,
-            checked: true,
-        }];
+        // The opened points: position, parent and depth (the index along its chain).
+        let mut nodes: Vec<Node> = Vec::new();
+        // Each expansion's candidates with finite values, in increasing value (ties in the
+        // directions' order), in `pending[first..first + len]`; the open list holds each
+        // expansion's best candidate not yet taken, and taking one puts its next on the list.
+        // This is the order in which a list of every candidate would give them up, at a
+        // fraction of the list's work: a clear descent takes one candidate per expansion.
+        let mut expansions: Vec<Expansion> = Vec::new();
+        let mut pending: Vec<(f32, Point3m)> = Vec::new();
         let mut opened: HashSet<u64, BuildHasherDefault<LatticeHasher>> = HashSet::default();
-        let mut open = BinaryHeap::new();
-        let start_value = values_or_infinity(field, &[start])[0];
-        open.push(Reverse((Order(start_value), 0usize)));
-        let mut nearest = (distance(start, goal), 0usize);
+        let mut open: BinaryHeap<Reverse<(Order, usize, usize)>> = BinaryHeap::new();
+        let mut nearest = (f32::INFINITY, 0usize);
         let mut end = None;
         let mut exhausted = false;
-        let (mut expansions, mut checks) = (0, 0);
+        let (mut expanded, mut checks) = (0, 0);
+        let mut candidates = [[0.0f32; 3]; 26];
+        let mut started = false;
         loop {
-            let Some(Reverse((_, n))) = open.pop() else {
-                exhausted = true;
-                break;
+            // The next point: the start first, then the best candidate on the list.
+            let (here, parent, depth) = match started {
+                false => (start, usize::MAX, 0),
+                true => {
+                    let Some(Reverse((_, e, k))) = open.pop() else {
+                        exhausted = true;
+                        break;
+                    };
+                    let x: &Expansion = &expansions[e];
+                    if k + 1 < x.len {
+                        let (v, _) = pending[x.first + k + 1];
+                        open.push(Reverse((Order(v), e, k + 1)));
+                    }
+                    let parent = x.parent;
+                    (pending[x.first + k].1, parent, nodes[parent].depth + 1)
+                }
             };
-            let Node {
-                at: here,
-                parent,
-                depth,
-                checked,
-            } = nodes[n];
+            started = true;
             if opened.contains(&key(here)) {
                 continue;
             }
             // Lazy: a candidate's pose is checked when it comes off the list, so a clear
-            // descent checks one pose per step rather than all 26.
-            if !checked {
+            // descent checks one pose per step rather than all 26. The start needs no check.
+            if parent != usize::MAX {
                 if self.max_checks > 0 && checks == self.max_checks {
                     break;
                 }
@@ -150,6 +159,12 @@ impl FieldSearch3 {
                 }
             }
             opened.insert(key(here));
+            nodes.push(Node {
+                at: here,
+                parent,
+                depth,
+            });
+            let n = nodes.len() - 1;
             let d = distance(here, goal);
             if d < nearest.0 {
                 nearest = (d, n);
@@ -163,30 +178,38 @@ impl FieldSearch3 {
                     at: goal,
                     parent: n,
                     depth: depth + 1,
-                    checked: true,
                 });
                 end = Some(nodes.len() - 1);
                 break;
             }
-            if expansions == self.max_steps {
+            if expanded == self.max_steps {
                 break;
             }
-            expansions += 1;
-            let candidates: Vec<Point3m> = dirs
-                .iter()
-                .map(|v| [here[0] + s * v[0], here[1] + s * v[1], here[2] + s * v[2]])
-                .collect();
+            expanded += 1;
+            for (c, v) in candidates.iter_mut().zip(&dirs) {
+                *c = [here[0] + s * v[0], here[1] + s * v[1], here[2] + s * v[2]];
+            }
             let values = values_or_infinity(field, &candidates);
-            for (c, v) in candidates.into_iter().zip(values) {
-                if v.is_finite() && !opened.contains(&key(c)) {
-                    nodes.push(Node {
-                        at: c,
-                        parent: n,
-                        depth: depth + 1,
-                        checked: false,
-                    });
-                    open.push(Reverse((Order(v), nodes.len() - 1)));
-                }
+            let first = pending.len();
+            // Whether a candidate was opened already is asked when it comes off the list: most
+            // never do.
+            pending.extend(
+                candidates
+                    .iter()
+                    .zip(values)
+                    .filter(|&(_, v)| v.is_finite())
+                    .map(|(&c, v)| (v, c)),
+            );
+            // Stable: equal values keep the directions' order.
+            pending[first..].sort_by(|a, b| a.0.total_cmp(&b.0));
+            let len = pending.len() - first;
+            if len > 0 {
+                open.push(Reverse((Order(pending[first].0), expansions.len(), 0)));
+                expansions.push(Expansion {
+                    parent: n,
+                    first,
+                    len,
+                });
             }
         }
         let mut chain = Vec::new();
@@ -342,13 +365,20 @@ fn lattice_key(p: Point3m, cell: f32) -> u64 {
     (index(p[0]) << 42) | (index(p[1]) << 21) | index(p[2])
 }
 
-/// A point on the search's open list.
+/// A point the search opened.
 #[derive(Clone, Copy, Debug)]
 struct Node {
     at: Point3m,
     parent: usize,
     depth: usize,
-    checked: bool,
+}
+
+/// One expansion's candidates: `pending[first..first + len]`, from the opened point `parent`.
+#[derive(Clone, Copy, Debug)]
+struct Expansion {
+    parent: usize,
+    first: usize,
+    len: usize,
 }
 
 /// An f32 ordered by `total_cmp`, for the open list.
