@@ -29,7 +29,7 @@ use envfield::nets::FieldNet;
 use envfield::plan::space3::SamplingConfig;
 use envfield::rooms::harness::{
     pairs, standing_places, FloorPlanner, Pair, PairKind, PairSetup, PlannerKind, RoomContext,
-    EXACT_BAND,
+    EXACT_BAND, PIN_RADIUS,
 };
 use envfield::rooms::{
     sample_region, AccessibleRegion, ExactField3, LearnedField3, SceneTables, BENEATH_CELL,
@@ -189,7 +189,8 @@ fn bench_rooms(c: &mut Criterion) {
         b.iter(|| {
             i += 1;
             let learned = LearnedField3::new(&net, &region, walks[i % walks.len()].goal);
-            black_box(learned.and_then(|l| l.tabulate(&region)).expect("table"))
+            let table = learned.and_then(|l| l.tabulate(&region));
+            black_box(table.and_then(|t| t.pinned(PIN_RADIUS)).expect("table"))
         })
     });
     let exact: Vec<ExactField3> = walks
@@ -200,7 +201,8 @@ fn bench_rooms(c: &mut Criterion) {
         .iter()
         .map(|t| {
             let learned = LearnedField3::new(&net, &region, t.goal).expect("learned");
-            learned.tabulate(&region).expect("table")
+            let table = learned.tabulate(&region).expect("table");
+            table.pinned(PIN_RADIUS).expect("pinned")
         })
         .collect();
     let n = walks.len();
@@ -272,7 +274,8 @@ fn bench_rooms(c: &mut Criterion) {
                 .filter(|_| planner == PlannerKind::Ours)
                 .map(|t| {
                     let learned = LearnedField3::new(&net, &region, t.goal).expect("learned");
-                    learned.tabulate(&region).expect("table")
+                    let table = learned.tabulate(&region).expect("table");
+                    table.pinned(PIN_RADIUS).expect("pinned")
                 })
                 .collect();
             group.bench_function(BenchmarkId::new(format!("sit/{name}"), m), |b| {

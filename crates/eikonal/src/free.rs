@@ -298,8 +298,9 @@ mod tests {
             speed: Some(&speed),
             ..Default::default()
         };
-        assert!(e(fmm.solve3_free(&cells, &[Cell3::new(0, 0, 0)], with_speed))
-            .contains("solve3_with"));
+        assert!(
+            e(fmm.solve3_free(&cells, &[Cell3::new(0, 0, 0)], with_speed)).contains("solve3_with")
+        );
         let walls = Grid3::from_obstacles([2, 2, 1], vec![true; 4]).unwrap();
         assert!(FreeCells3::new(&walls).is_err());
     }

@@ -7,9 +7,9 @@
 use crate::{AccessibleRegion, Result, RoomsError};
 use envfield_eikonal::{FastMarching, FreeCells3, Order, SolveOptions3};
 use envfield_grid::{sample_finite_by, Cell3, ContinuousField3, Field3, Point3, Point3m};
-use std::sync::Arc;
 use envfield_nets::{Batch, FieldNet, ModelConfig};
 use envfield_scene::VoxelFrame;
+use std::sync::Arc;
 
 /// A point in metres as continuous voxel coordinates (voxel centres at integers), checked to
 /// lie within the lattice's box.
@@ -143,6 +143,42 @@ impl VoxelField3 {
     /// The goal voxel.
     pub fn goal(&self) -> Cell3 {
         self.goal
+    }
+
+    /// The field pinned to its goal: within `radius` metres of the goal voxel's centre each
+    /// value `v` at distance `r` becomes `w v + (1 - w) r`, `w` rising smoothly from 0 at the
+    /// goal to 1 at `radius` (`3t^2 - 2t^3`, `t = r / radius`), so the field is 0 at its goal
+    /// and falls towards it from every side nearby. A learned field is least right at its own
+    /// goal (a network reads a few centimetres to a metre there, where the exact field reads
+    /// 0), and a search stops in the hollow that leaves; the straight line is the reaching
+    /// distance wherever the way to the goal is clear, as it is within a sit-down's reach.
+    /// Farther out the field is unchanged.
+    ///
+    /// # Errors
+    /// [`RoomsError::InvalidInput`] for a radius that is negative or not finite.
+    pub fn pinned(mut self, radius: f32) -> Result<Self> {
+        if !(radius.is_finite() && radius >= 0.0) {
+            return Err(RoomsError::InvalidInput(format!(
+                "a field's pinning radius must be finite and >= 0 metres, got {radius}"
+            )));
+        }
+        if radius == 0.0 {
+            return Ok(self);
+        }
+        let goal = self.frame.center(self.goal);
+        for (k, &i) in self.cells.indices().iter().enumerate() {
+            let [nx, ny, nz] = self.frame.shape;
+            let i = i as usize;
+            debug_assert!(i < nx * ny * nz);
+            let c = Cell3::new(i / (ny * nz), (i / nz) % ny, i % nz);
+            let r = (self.frame.center(c) - goal).norm();
+            if r < radius {
+                let t = r / radius;
+                let w = t * t * (3.0 - 2.0 * t);
+                self.metres[k] = w * self.metres[k] + (1.0 - w) * r;
+            }
+        }
+        Ok(self)
     }
 
     /// Bytes of the table (a value per accessible voxel; the numbering of the voxels is the

@@ -208,7 +208,8 @@ pub enum FieldKind {
     /// paper's way).
     Learned,
     /// The learned field tabulated over the region once per goal
-    /// ([`LearnedField3::tabulate`]), read by interpolation at every step.
+    /// ([`LearnedField3::tabulate`]) and pinned to its goal within [`PIN_RADIUS`]
+    /// ([`crate::VoxelField3::pinned`]), read by interpolation at every step.
     LearnedTable,
     /// The exact field ([`ExactField3`]), fast marching once per goal.
     Exact,
@@ -595,6 +596,9 @@ impl<'a> PairSetup<'a> {
                 // Nothing between the legs is a walk's check: a sit-down lowers the pelvis
                 // over the seat while its feet still bear the body.
                 clear_beneath: pair.kind == PairKind::Walk,
+                // A sit-down is made for its seat, where it is played: its poses follow where
+                // the torso is.
+                in_place: pair.kind == PairKind::Sit,
                 tables,
             },
             search: {
@@ -624,6 +628,12 @@ impl<'a> PairSetup<'a> {
 /// ([`ExactField3::toward`]): room for the search to go round what the poses refuse, at a
 /// fraction of the whole region's march.
 pub const EXACT_BAND: f32 = 1.0;
+
+/// How far from its goal ours' learned table is pinned to it, metres
+/// ([`VoxelField3::pinned`](crate::VoxelField3::pinned)): about the reach of a sit-down, whose
+/// seated goal is where a room's network reads worst (the measurements, with and without it,
+/// are in `docs/rooms.md`).
+pub const PIN_RADIUS: f32 = 0.5;
 
 /// Runs every planner of `planners` on one pair of the room, each timed on its own (per path,
 /// and its per-goal and per-room work apart), its poses fitted and checked against the scene.
@@ -655,7 +665,7 @@ pub fn run_pair(
                 .any(|p| p.field() == Some(FieldKind::LearnedTable)) =>
         {
             let t = Instant::now();
-            let table = learned.tabulate(region)?;
+            let table = learned.tabulate(region)?.pinned(PIN_RADIUS)?;
             Some((table, t.elapsed().as_secs_f64()))
         }
         _ => None,

@@ -71,6 +71,14 @@ pub struct PoseFilter<'a> {
     /// filter at their centres; a torso elsewhere in a voxel beside a table may stand with
     /// its pelvis over the table's edge, every joint clear.
     pub clear_beneath: bool,
+    /// Whether the sequence is recorded where it is played (a sit-down made for its seat, as
+    /// [`SitDown::sequence`](crate::SitDown::sequence) gives it): each point then wears the
+    /// frame whose torso lies nearest to it, so its poses follow where the torso is rather
+    /// than how many steps it took to get there. A path shorter than the recording (a chord
+    /// across the arc a body's pelvis takes onto a seat) reaches the seat seated, not still
+    /// lowering; a torso off the recording's path wears the nearest frame moved onto it, and
+    /// its checks say whether that stands.
+    pub in_place: bool,
     /// The scene sampled once per room: when set, the search's checks ([`StepFilter::keep`])
     /// read it instead of the scene, a few lookups per joint instead of a pass over the
     /// scene's parts. [`PoseFilter::poses_along`], which scores a path, always checks against
@@ -89,11 +97,27 @@ impl PoseFilter<'_> {
         }
     }
 
+    /// The frame of step `step` landing on `at`: by the step's index, or where the torso is
+    /// ([`PoseFilter::in_place`]).
+    fn frame_at(&self, step: usize, at: Point3m) -> usize {
+        if !self.in_place {
+            return self.frame_of(step);
+        }
+        let at = point(at);
+        let frames = &self.sequence.frames;
+        (0..frames.len())
+            .min_by(|&a, &b| {
+                let d = |f: usize| (frames[f].torso() - at).norm_squared();
+                d(a).total_cmp(&d(b))
+            })
+            .unwrap_or(0)
+    }
+
     /// Step `step`'s frame placed with its torso at `to`, facing from `from` to `to` (its
     /// own heading when the move is vertical, or always unless
     /// [`PoseFilter::face_the_move`]).
     pub fn placed(&self, step: usize, from: Point3m, to: Point3m) -> envfield_affordance::Pose {
-        let frame = &self.sequence.frames[self.frame_of(step)];
+        let frame = &self.sequence.frames[self.frame_at(step, to)];
         let torso = frame.torso();
         let facing = frame.facing();
         let (dx, dy) = (to[0] - from[0], to[1] - from[1]);
@@ -129,8 +153,14 @@ impl PoseFilter<'_> {
         for i in 0..path.len() {
             let (pose, support) = if i == 0 {
                 let next = path.get(1).copied().unwrap_or(path[0]);
-                // Point 0 wears frame 0: placed as the step "before" the first.
-                let frame = &self.sequence.frames[0];
+                // Point 0 wears frame 0 (or the frame nearest it, in place): placed as the step
+                // "before" the first.
+                let f = if self.in_place {
+                    self.frame_at(0, path[0])
+                } else {
+                    0
+                };
+                let frame = &self.sequence.frames[f];
                 let torso = frame.torso();
                 let facing = frame.facing();
                 let (dx, dy) = (next[0] - path[0][0], next[1] - path[0][1]);
@@ -142,12 +172,12 @@ impl PoseFilter<'_> {
                 let p = frame
                     .rotated_about_z(turn, &torso)
                     .translated(&(point(path[0]) - torso));
-                (p, self.sequence.supports[0])
+                (p, self.sequence.supports[f])
             } else {
                 let k = i - 1;
                 (
                     self.placed(k, path[i - 1], path[i]),
-                    self.sequence.supports[self.frame_of(k)],
+                    self.sequence.supports[self.frame_at(k, path[i])],
                 )
             };
             reports.push(
@@ -170,13 +200,13 @@ impl StepFilter for PoseFilter<'_> {
         from: Point3m,
         candidates: &[Point3m],
     ) -> envfield_plan::Result<Vec<bool>> {
-        let support = self.sequence.supports[self.frame_of(step)];
         candidates
             .iter()
             .map(|&c| {
                 if !self.region.contains(c) {
                     return Ok(false);
                 }
+                let support = self.sequence.supports[self.frame_at(step, c)];
                 let pose = self.placed(step, from, c);
                 let valid = match self.tables {
                     Some(t) => pose_valid(&t.distances, &pose, support, &self.affordance),

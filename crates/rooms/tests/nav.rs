@@ -79,6 +79,7 @@ fn only_the_search_with_affordance_keeps_every_pose_valid() {
         face_the_move: true,
         affordance: Default::default(),
         clear_beneath: false,
+        in_place: false,
         tables: None,
     };
     let search = FieldSearch3 {
@@ -193,7 +194,12 @@ fn ours_reads_its_field_and_distances_once_and_the_costs_are_split() {
             "{c:?}: {a} vs {b}"
         );
     }
-    assert!(table.voxels().unwrap().values().iter().any(|v| v.is_infinite()));
+    assert!(table
+        .voxels()
+        .unwrap()
+        .values()
+        .iter()
+        .any(|v| v.is_infinite()));
 
     let (tables, tables_s) = RoomContext::tables(&scene).unwrap();
     assert!(tables_s > 0.0 && tables.bytes() > 0);

@@ -5,8 +5,10 @@
 use envfield_affordance::{
     bones_clear, check_pose, sit_down, standing_pose, AffordanceConfig, Pose, SitConfig, Support,
 };
+use envfield_plan::space3::straight_line;
 use envfield_rooms::{
-    afford, clear_beneath, implausible, plausible, AccessibleRegion, RegionConfig, SitDown,
+    afford, clear_beneath, implausible, plausible, AccessibleRegion, PoseFilter, RegionConfig,
+    SitDown,
 };
 use envfield_scene::nalgebra::{Isometry3, Point3, Vector3};
 use envfield_scene::{Furniture, ObjectKind, Primitive, Room, Scene, SceneObject};
@@ -197,10 +199,10 @@ fn a_bar_between_the_legs_below_the_shins_is_not_clear_beneath() {
     assert!(clear_beneath(&room.scene, &lifted).unwrap());
 }
 
-#[test]
-fn a_seat_joins_the_region_through_a_sit_down() {
-    // A 0.5 m box seat, 0.45 m high, in the middle of the floor; standing torsos over the
-    // floor and seated ones over the seat, as the filter keeps them.
+/// A room with a 0.5 m box seat, 0.45 m high, in the middle of its floor, and its region from
+/// standing torsos over the floor and seated ones over the seat, as the filter keeps them; the
+/// standing and the seated torsos' heights.
+fn seat_region() -> (Room, AccessibleRegion, f32, f32) {
     let seat = SceneObject::new("seat", ObjectKind::Chair)
         .with(Primitive::cuboid([0.5, 0.5, 0.45]), at(2.0, 2.0, 0.225))
         .unwrap();
@@ -237,6 +239,13 @@ fn a_seat_joins_the_region_through_a_sit_down() {
         "a seated torso is kept"
     );
     let region = AccessibleRegion::from_kept(&room.scene, kept, &config).unwrap();
+    (room, region, standing, seated)
+}
+
+#[test]
+fn a_seat_joins_the_region_through_a_sit_down() {
+    let (room, region, standing, seated) = seat_region();
+    let config = RegionConfig::default();
     assert!(
         region.contains([0.55, 0.55, standing]),
         "the floor is in the region"
@@ -293,4 +302,59 @@ fn a_sit_down_off_its_range_or_not_finite_is_an_error() {
         let e = bad.sequence().unwrap_err().to_string();
         assert!(e.contains("frame 0"), "{e}");
     }
+}
+
+/// A sit-down played in place wears, at each point, the frame whose torso lies nearest: along
+/// its own recording it gives back its recorded poses, and a path of fewer steps than the
+/// recording still arrives seated, where counting steps would arrive still lowering.
+#[test]
+fn a_sit_down_played_in_place_follows_where_its_torso_is() {
+    let (room, region, _, _) = seat_region();
+    let sit = &region.sit_downs[0];
+    let seq = sit.sequence().unwrap();
+    let mut filter = PoseFilter {
+        scene: &room.scene,
+        region: &region,
+        sequence: &seq,
+        repeat: false,
+        face_the_move: false,
+        affordance: Default::default(),
+        clear_beneath: false,
+        in_place: true,
+        tables: None,
+    };
+    let recorded: Vec<[f32; 3]> = seq.frames.iter().map(|f| f.torso().into()).collect();
+    let (poses, _) = filter.poses_along(&recorded).unwrap();
+    for (k, (a, b)) in poses.frames.iter().zip(&seq.frames).enumerate() {
+        let off = (0..a.joints.len())
+            .map(|j| (a.joints[j] - b.joints[j]).norm())
+            .fold(0.0f32, f32::max);
+        assert!(off < 1e-4, "frame {k}: {off}");
+    }
+    // The chord from standing to seated in fewer steps than the recording's.
+    let chord = straight_line(sit.start, sit.seated, 1.5 * seq.step_length()).unwrap();
+    assert!(
+        chord.len() < 2 * seq.frames.len() / 3 + 2,
+        "{}",
+        chord.len()
+    );
+    let (in_place, reports) = filter.poses_along(&chord).unwrap();
+    let seated = seq.frames.last().unwrap();
+    let off = |a: &Pose| {
+        (0..a.joints.len())
+            .map(|j| (a.joints[j] - seated.joints[j]).norm())
+            .fold(0.0f32, f32::max)
+    };
+    assert!(off(in_place.frames.last().unwrap()) < 1e-4);
+    assert_eq!(*in_place.supports.last().unwrap(), Support::Sitting);
+    assert!(reports.last().unwrap().valid(), "{:?}", reports.last());
+    filter.in_place = false;
+    let (by_steps, _) = filter.poses_along(&chord).unwrap();
+    assert!(
+        off(by_steps.frames.last().unwrap()) > 0.02,
+        "counting steps, the chord ends on an earlier frame: {} of {} points, {}",
+        chord.len(),
+        seq.frames.len(),
+        off(by_steps.frames.last().unwrap())
+    );
 }

@@ -120,6 +120,59 @@ fn the_exact_field_of_an_open_box_is_the_distance() {
     assert!(ExactField3::toward(&region, Cell3::new(5, 5, 2), [10.0, 0.0, 0.0], 0.5).is_err());
 }
 
+/// A field pinned to its goal is 0 there, lies between its own value and the straight-line
+/// distance within the radius, and is unchanged beyond it; a bad radius is an error.
+#[test]
+fn a_pinned_field_is_zero_at_its_goal_and_unchanged_beyond_its_radius() {
+    // Two rooms joined by a door in a wall at x = 2 m: behind the wall the way round is
+    // longer than the straight line.
+    let shape = [40, 30, 3];
+    let frame = VoxelFrame {
+        origin: envfield_scene::nalgebra::Point3::new(0.0, 0.0, 0.0),
+        voxel: 0.1,
+        shape,
+    };
+    let mut grid = Grid3::new(shape[0], shape[1], shape[2]).unwrap();
+    for y in 0..25 {
+        for z in 0..3 {
+            grid.set_obstacle(Cell3::new(20, y, z), true).unwrap();
+        }
+    }
+    let region = AccessibleRegion::new(frame, grid, vec![[0.05, 0.05, 0.05]], 1).unwrap();
+    let goal = Cell3::new(22, 5, 1);
+    let exact = ExactField3::at_cell(&region, goal).unwrap();
+    let pinned = exact.clone().pinned(0.6).unwrap();
+    assert_eq!(pinned.at(goal), 0.0);
+    let centre = region.frame.center(goal);
+    let mut pulled = 0;
+    for &i in region.free_indices() {
+        let c = region.grid.cell(i);
+        let r = (region.frame.center(c) - centre).norm();
+        let (v, p) = (exact.at(c), pinned.at(c));
+        if r >= 0.6 {
+            assert_eq!(v.to_bits(), p.to_bits(), "{c:?}");
+        } else {
+            assert!(
+                p >= v.min(r) - 1e-5 && p <= v.max(r) + 1e-5,
+                "{c:?}: {p} {v} {r}"
+            );
+            pulled += usize::from(p < v - 0.05);
+        }
+    }
+    assert!(
+        pulled > 0,
+        "behind the wall the straight line pulls the field down"
+    );
+    for bad in [f32::NAN, -0.1, f32::INFINITY] {
+        assert!(exact.clone().pinned(bad).is_err(), "{bad}");
+    }
+    let same = exact.clone().pinned(0.0).unwrap();
+    assert_eq!(
+        same.at(Cell3::new(23, 6, 1)),
+        exact.at(Cell3::new(23, 6, 1))
+    );
+}
+
 /// Near a wall the exact field stays finite in every accessible voxel (trilinear over the
 /// accessible corners) and infinite in the wall, and matches plain trilinear in the open.
 #[test]
