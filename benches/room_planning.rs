@@ -4,8 +4,9 @@
 //!
 //! - per room: the scene's distance grid and surface columns that ours' pose checks read, and the navigation
 //!   mesh's build (Recast's pipeline in Rust and Polyanya's import);
-//! - per goal: the exact field's fast marching, and the learned field's one batched pass over
-//!   the region;
+//! - per goal: the exact field's fast marching over the region's voxels (and, for the ratio,
+//!   over its whole box), and the learned field's one batched pass over the region (pinned to
+//!   its goal, as `room_nav` makes it);
 //! - per walking path, four pairs taken in turn: ours on the learned field's table, ours on
 //!   the exact field with its fast marching (to the start and 1 m past it, as `room_nav`
 //!   marches it) inside each call (`ours_exact_with_goal`), the
@@ -24,12 +25,13 @@ mod navmesh;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use envfield::affordance::{walk, WalkConfig};
+use envfield::eikonal::{FastMarching, Order};
 use envfield::grid::{Cell3, ContinuousField3};
 use envfield::nets::FieldNet;
 use envfield::plan::space3::SamplingConfig;
 use envfield::rooms::harness::{
-    pairs, standing_places, FloorPlanner, Pair, PairKind, PairSetup, PlannerKind, RoomContext,
-    EXACT_BAND, PIN_RADIUS,
+    learned_table, pairs, standing_places, FloorPlanner, Pair, PairKind, PairSetup, PlannerKind,
+    RoomContext, EXACT_BAND,
 };
 use envfield::rooms::{
     sample_region, AccessibleRegion, ExactField3, LearnedField3, SceneTables, BENEATH_CELL,
@@ -184,13 +186,30 @@ fn bench_rooms(c: &mut Criterion) {
             black_box(ExactField3::at_cell(&region, walks[i % walks.len()].goal).expect("field"))
         })
     });
+    // The same march over the region's whole box (the dense solve), for the ratio.
+    group.bench_function("goal/exact_fast_marching_dense", |b| {
+        let fmm = FastMarching {
+            order: Order::Second,
+            spacing: region.frame.voxel,
+            ..FastMarching::default()
+        };
+        let mut i = 0;
+        b.iter(|| {
+            i += 1;
+            let goal = walks[i % walks.len()].goal;
+            black_box(fmm.solve3(&region.grid, &[goal]).expect("field"))
+        })
+    });
     group.bench_function("goal/learned_table", |b| {
         let mut i = 0;
         b.iter(|| {
             i += 1;
             let learned = LearnedField3::new(&net, &region, walks[i % walks.len()].goal);
-            let table = learned.and_then(|l| l.tabulate(&region));
-            black_box(table.and_then(|t| t.pinned(PIN_RADIUS)).expect("table"))
+            black_box(
+                learned
+                    .and_then(|l| learned_table(&l, &region))
+                    .expect("table"),
+            )
         })
     });
     let exact: Vec<ExactField3> = walks
@@ -201,8 +220,7 @@ fn bench_rooms(c: &mut Criterion) {
         .iter()
         .map(|t| {
             let learned = LearnedField3::new(&net, &region, t.goal).expect("learned");
-            let table = learned.tabulate(&region).expect("table");
-            table.pinned(PIN_RADIUS).expect("pinned")
+            learned_table(&learned, &region).expect("table")
         })
         .collect();
     let n = walks.len();
@@ -274,8 +292,7 @@ fn bench_rooms(c: &mut Criterion) {
                 .filter(|_| planner == PlannerKind::Ours)
                 .map(|t| {
                     let learned = LearnedField3::new(&net, &region, t.goal).expect("learned");
-                    let table = learned.tabulate(&region).expect("table");
-                    table.pinned(PIN_RADIUS).expect("pinned")
+                    learned_table(&learned, &region).expect("table")
                 })
                 .collect();
             group.bench_function(BenchmarkId::new(format!("sit/{name}"), m), |b| {

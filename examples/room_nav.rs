@@ -304,7 +304,7 @@ fn main() -> Result<()> {
             tables_s,
             navmesh: mesh.as_ref().map(|m| (m as &dyn FloorPlanner, m.build_s)),
         };
-        memory.push(room.bytes());
+        memory.push(room.bytes()?);
         let ps = pairs(generated.as_ref(), &scene, &region, args.pairs, seed)?;
         for (i, pair) in ps.iter().enumerate() {
             let budget = match pair.kind {

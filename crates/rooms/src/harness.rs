@@ -11,7 +11,7 @@ use crate::SceneTables;
 use crate::{
     afford, point, sit_on, AccessibleRegion, ExactField3, PoseFilter, RegionConfig, SitDown,
 };
-use crate::{LearnedField3, Result, RoomsError};
+use crate::{LearnedField3, Result, RoomsError, VoxelField3};
 use envfield_affordance::{
     resample_path, walk, AffordanceReport, PoseSequence, Support, WalkConfig,
 };
@@ -537,12 +537,18 @@ impl<'a> RoomContext<'a> {
     }
 
     /// The bytes ours and the navigation mesh keep for the room, by name: `region_bytes` (a
-    /// byte a voxel), `distances_bytes` (the distance grid), `beneath_bytes` (the surface
-    /// columns), `field_per_goal_bytes` (one goal's field table, an f32 a voxel) and
-    /// `navmesh_bytes` (0 without one).
-    pub fn bytes(&self) -> [(&'static str, usize); 5] {
-        [
+    /// byte a voxel of the region's box), `free_cells_bytes` (the accessible voxels numbered
+    /// and linked for fast marching, [`AccessibleRegion::free_cells`]), `distances_bytes` (the
+    /// distance grid), `beneath_bytes` (the surface columns), `field_per_goal_bytes` (one
+    /// goal's field table, an f32 an accessible voxel) and `navmesh_bytes` (0 without one).
+    ///
+    /// # Errors
+    /// As [`AccessibleRegion::free_cells`].
+    pub fn bytes(&self) -> Result<[(&'static str, usize); 6]> {
+        let cells = self.region.free_cells()?;
+        Ok([
             ("region_bytes", self.region.grid.len()),
+            ("free_cells_bytes", cells.bytes()),
             (
                 "distances_bytes",
                 self.tables.map_or(0, |t| t.distances.bytes()),
@@ -551,9 +557,9 @@ impl<'a> RoomContext<'a> {
                 "beneath_bytes",
                 self.tables.map_or(0, |t| t.beneath.bytes()),
             ),
-            ("field_per_goal_bytes", 4 * self.region.grid.len()),
+            ("field_per_goal_bytes", 4 * cells.len()),
             ("navmesh_bytes", self.navmesh.map_or(0, |(m, _)| m.bytes())),
-        ]
+        ])
     }
 
     /// The seconds `planner` spent on the room before any goal.
@@ -635,6 +641,16 @@ pub const EXACT_BAND: f32 = 1.0;
 /// are in `docs/rooms.md`).
 pub const PIN_RADIUS: f32 = 0.5;
 
+/// Ours' table of the learned field for its goal: one batched pass over the region
+/// ([`LearnedField3::tabulate`]), pinned to the goal within [`PIN_RADIUS`]
+/// ([`VoxelField3::pinned`]).
+///
+/// # Errors
+/// As [`LearnedField3::tabulate`].
+pub fn learned_table(learned: &LearnedField3, region: &AccessibleRegion) -> Result<VoxelField3> {
+    learned.tabulate(region)?.pinned(PIN_RADIUS)
+}
+
 /// Runs every planner of `planners` on one pair of the room, each timed on its own (per path,
 /// and its per-goal and per-room work apart), its poses fitted and checked against the scene.
 ///
@@ -665,7 +681,7 @@ pub fn run_pair(
                 .any(|p| p.field() == Some(FieldKind::LearnedTable)) =>
         {
             let t = Instant::now();
-            let table = learned.tabulate(region)?.pinned(PIN_RADIUS)?;
+            let table = learned_table(learned, region)?;
             Some((table, t.elapsed().as_secs_f64()))
         }
         _ => None,

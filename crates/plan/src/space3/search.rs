@@ -127,21 +127,19 @@ impl FieldSearch3 {
         let mut started = false;
         loop {
             // The next point: the start first, then the best candidate on the list.
-            let (here, parent, depth) = match started {
-                false => (start, usize::MAX, 0),
-                true => {
-                    let Some(Reverse((_, e, k))) = open.pop() else {
-                        exhausted = true;
-                        break;
-                    };
-                    let x: &Expansion = &expansions[e];
-                    if k + 1 < x.len {
-                        let (v, _) = pending[x.first + k + 1];
-                        open.push(Reverse((Order(v), e, k + 1)));
-                    }
-                    let parent = x.parent;
-                    (pending[x.first + k].1, parent, nodes[parent].depth + 1)
+            let (here, parent, depth) = if started {
+                let Some(Reverse((_, e, k))) = open.pop() else {
+                    exhausted = true;
+                    break;
+                };
+                let x: &Expansion = &expansions[e];
+                if k + 1 < x.len {
+                    let (v, _) = pending[x.first + k + 1];
+                    open.push(Reverse((Order(v), e, k + 1)));
                 }
+                (pending[x.first + k].1, x.parent, nodes[x.parent].depth + 1)
+            } else {
+                (start, usize::MAX, 0)
             };
             started = true;
             if opened.contains(&key(here)) {
