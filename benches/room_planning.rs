@@ -13,7 +13,10 @@
 //!   paper's search alone (a network pass per step), ours without affordance, the navigation
 //!   mesh's query, PRM with its roadmap, RRT* at 500 / 5000 iterations and RRT;
 //! - per sit-down path (every seat of the room its region reaches): ours on the exact field
-//!   with its fast marching, ours on the learned field's table, PRM and RRT*.
+//!   with its fast marching, ours on the learned field's table, PRM and RRT*;
+//! - per walking path on real-furniture room 10000 (Sweet Home 3D's models, when
+//!   `scripts/fetch_sweethome3d.sh` has fetched them; its field trained first, about 80 s):
+//!   ours on the learned field's table, ours on the exact field with its fast marching, PRM.
 //!
 //! `cargo bench --bench room_planning`
 
@@ -34,10 +37,10 @@ use envfield::rooms::harness::{
     RoomContext, EXACT_BAND,
 };
 use envfield::rooms::{
-    sample_region, AccessibleRegion, ExactField3, LearnedField3, SceneTables, BENEATH_CELL,
-    DISTANCE_CELL,
+    sample_region, train_field3, AccessibleRegion, ExactField3, Field3Config, LearnedField3,
+    SceneTables, BENEATH_CELL, DISTANCE_CELL,
 };
-use envfield::scene::{generate_room, Room, RoomConfig};
+use envfield::scene::{catalogue_room, generate_room, Catalogue, Room, RoomConfig};
 use envfield::scene::{DistanceGrid, SurfaceColumns};
 use envfield::vae::Cvae;
 use navmesh::{Navmesh, NavmeshConfig};
@@ -316,7 +319,78 @@ fn bench_rooms(c: &mut Criterion) {
             });
         }
     }
+    bench_real(&mut group, &vae, seed);
     group.finish();
+}
+
+/// The walking rows of ours and PRM on real-furniture room `seed` (Sweet Home 3D's models),
+/// when the catalogue is fetched (`scripts/fetch_sweethome3d.sh`); its learned field is
+/// trained here first, as `room_nav` trains it (the same weights).
+fn bench_real(
+    group: &mut criterion::BenchmarkGroup<criterion::measurement::WallTime>,
+    vae: &Cvae,
+    seed: u64,
+) {
+    let Some(dir) = Catalogue::find() else {
+        eprintln!("no catalogue (scripts/fetch_sweethome3d.sh): no real-furniture rows");
+        return;
+    };
+    let catalogue = Catalogue::read(dir).expect("the catalogue");
+    let room = catalogue_room(&catalogue, &RoomConfig::catalogue(), seed).expect("room");
+    let region = sample_region(vae, &room.scene, 6000, seed).expect("region");
+    let config = Field3Config {
+        seed,
+        ..Field3Config::default()
+    };
+    eprintln!(
+        "real-furniture room {seed}: training its field ({} steps)",
+        config.steps
+    );
+    let (net, _) = train_field3(&region, &config, None, |_, _, _| {}).expect("field");
+    let walks = walking_pairs(&room, &region, seed);
+    let (scene_tables, _) = RoomContext::tables(&room.scene).expect("tables");
+    let navmesh = Navmesh::build(
+        &room.scene,
+        &NavmeshConfig::for_gait(&walks[0].pair.sequence),
+    )
+    .expect("navmesh");
+    let shared = Shared {
+        room: &room,
+        region: &region,
+        tables: &scene_tables,
+        navmesh: &navmesh,
+    };
+    let tables: Vec<_> = walks
+        .iter()
+        .map(|t| {
+            let learned = LearnedField3::new(&net, &region, t.goal).expect("learned");
+            learned_table(&learned, &region).expect("table")
+        })
+        .collect();
+    let n = walks.len();
+    for (name, planner) in [
+        ("ours", PlannerKind::Ours),
+        ("ours_exact_with_goal", PlannerKind::OursExact),
+        ("prm", PlannerKind::Prm),
+    ] {
+        group.bench_function(BenchmarkId::new(format!("real_walk/{name}"), n), |b| {
+            let mut i = 0;
+            b.iter(|| {
+                let k = i % n;
+                i += 1;
+                let t = &walks[k];
+                match planner {
+                    PlannerKind::OursExact => {
+                        let field = ExactField3::toward(&region, t.goal, t.pair.start, EXACT_BAND)
+                            .expect("field");
+                        shared.plan(planner, t, Some(&field), 50.0)
+                    }
+                    PlannerKind::Ours => shared.plan(planner, t, Some(&tables[k]), 50.0),
+                    _ => shared.plan(planner, t, None, 50.0),
+                }
+            })
+        });
+    }
 }
 
 criterion_group!(benches, bench_rooms);

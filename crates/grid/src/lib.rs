@@ -61,7 +61,7 @@ pub use cell::{Cell2, Cell3, Point2, Point3};
 pub use components::Components;
 pub use ensemble::Ensemble;
 pub use error::{GridError, Result};
-pub use field::{sample_finite_by, Field2, Field3};
+pub use field::{sample_finite_within, Field2, Field3};
 pub use grid::{Grid2, Grid3};
 pub use io::{check_writable, write_atomic};
 pub use maze::{format_mazes, parse_mazes, read_mazes, write_mazes, Maze};

@@ -6,7 +6,7 @@
 
 use crate::{AccessibleRegion, Result, RoomsError};
 use envfield_eikonal::{FastMarching, FreeCells3, Order, SolveOptions3};
-use envfield_grid::{sample_finite_by, Cell3, ContinuousField3, Field3, Point3, Point3m};
+use envfield_grid::{sample_finite_within, Cell3, ContinuousField3, Field3, Point3, Point3m};
 use envfield_nets::{Batch, FieldNet, ModelConfig};
 use envfield_scene::VoxelFrame;
 use std::sync::Arc;
@@ -193,12 +193,13 @@ impl ContinuousField3 for VoxelField3 {
         // Over the accessible corners: plain trilinear weighting would make every point within
         // half a voxel of the region's faces infinite, and a torso standing in an accessible
         // voxel near a wall could neither be reached nor left.
+        // `to_voxel` checked it: finite, inside the lattice.
         let q = to_voxel(&self.frame, p)?;
-        sample_finite_by(self.frame.shape, q, |i| {
+        Ok(sample_finite_within(self.frame.shape, q, |i| {
             self.cells
                 .number_at(i)
                 .map_or(f32::INFINITY, |k| self.metres[k])
-        })
+        }))
     }
 
     /// Central differences of the trilinear interpolant over half a voxel.
