@@ -117,7 +117,12 @@ impl PoseFilter<'_> {
     /// own heading when the move is vertical, or always unless
     /// [`PoseFilter::face_the_move`]).
     pub fn placed(&self, step: usize, from: Point3m, to: Point3m) -> envfield_affordance::Pose {
-        let frame = &self.sequence.frames[self.frame_at(step, to)];
+        self.frame_placed(self.frame_at(step, to), from, to)
+    }
+
+    /// Frame `f` placed with its torso at `to`, facing as [`PoseFilter::placed`] says.
+    fn frame_placed(&self, f: usize, from: Point3m, to: Point3m) -> envfield_affordance::Pose {
+        let frame = &self.sequence.frames[f];
         let torso = frame.torso();
         let facing = frame.facing();
         let (dx, dy) = (to[0] - from[0], to[1] - from[1]);
@@ -155,11 +160,7 @@ impl PoseFilter<'_> {
                 let next = path.get(1).copied().unwrap_or(path[0]);
                 // Point 0 wears frame 0 (or the frame nearest it, in place): placed as the step
                 // "before" the first.
-                let f = if self.in_place {
-                    self.frame_at(0, path[0])
-                } else {
-                    0
-                };
+                let f = self.frame_at(0, path[0]);
                 let frame = &self.sequence.frames[f];
                 let torso = frame.torso();
                 let facing = frame.facing();
@@ -174,10 +175,10 @@ impl PoseFilter<'_> {
                     .translated(&(point(path[0]) - torso));
                 (p, self.sequence.supports[f])
             } else {
-                let k = i - 1;
+                let f = self.frame_at(i - 1, path[i]);
                 (
-                    self.placed(k, path[i - 1], path[i]),
-                    self.sequence.supports[self.frame_at(k, path[i])],
+                    self.frame_placed(f, path[i - 1], path[i]),
+                    self.sequence.supports[f],
                 )
             };
             reports.push(
@@ -206,8 +207,9 @@ impl StepFilter for PoseFilter<'_> {
                 if !self.region.contains(c) {
                     return Ok(false);
                 }
-                let support = self.sequence.supports[self.frame_at(step, c)];
-                let pose = self.placed(step, from, c);
+                let f = self.frame_at(step, c);
+                let support = self.sequence.supports[f];
+                let pose = self.frame_placed(f, from, c);
                 let valid = match self.tables {
                     Some(t) => pose_valid(&t.distances, &pose, support, &self.affordance),
                     None => pose_valid(self.scene, &pose, support, &self.affordance),
