@@ -38,7 +38,7 @@ use envfield::rooms::harness::{
 };
 use envfield::rooms::{
     sample_region, train_field3, AccessibleRegion, ExactField3, Field3Config, LearnedField3,
-    SceneTables, BENEATH_CELL, DISTANCE_CELL,
+    SceneTables, VoxelField3, BENEATH_CELL, DISTANCE_CELL,
 };
 use envfield::scene::{catalogue_room, generate_room, Catalogue, Room, RoomConfig};
 use envfield::scene::{DistanceGrid, SurfaceColumns};
@@ -107,6 +107,17 @@ fn sitting_pairs(room: &Room, region: &AccessibleRegion, seed: u64) -> Vec<Timed
                 goal,
                 shortest: d as f64,
             })
+        })
+        .collect()
+}
+
+/// Ours' learned table for each pair's goal, as `room_nav` makes it.
+fn learned_tables(net: &FieldNet, region: &AccessibleRegion, pairs: &[Timed]) -> Vec<VoxelField3> {
+    pairs
+        .iter()
+        .map(|t| {
+            let learned = LearnedField3::new(net, region, t.goal).expect("learned");
+            learned_table(&learned, region).expect("table")
         })
         .collect()
 }
@@ -219,13 +230,7 @@ fn bench_rooms(c: &mut Criterion) {
         .iter()
         .map(|t| ExactField3::at_cell(&region, t.goal).expect("field"))
         .collect();
-    let tables: Vec<_> = walks
-        .iter()
-        .map(|t| {
-            let learned = LearnedField3::new(&net, &region, t.goal).expect("learned");
-            learned_table(&learned, &region).expect("table")
-        })
-        .collect();
+    let tables = learned_tables(&net, &region, &walks);
     let n = walks.len();
     let walking = Shared {
         room: &room,
@@ -290,14 +295,11 @@ fn bench_rooms(c: &mut Criterion) {
             ("prm", PlannerKind::Prm),
             ("rrtstar", PlannerKind::RrtStar),
         ] {
-            let tables: Vec<_> = sits
-                .iter()
-                .filter(|_| planner == PlannerKind::Ours)
-                .map(|t| {
-                    let learned = LearnedField3::new(&net, &region, t.goal).expect("learned");
-                    learned_table(&learned, &region).expect("table")
-                })
-                .collect();
+            let tables = if planner == PlannerKind::Ours {
+                learned_tables(&net, &region, &sits)
+            } else {
+                Vec::new()
+            };
             group.bench_function(BenchmarkId::new(format!("sit/{name}"), m), |b| {
                 let mut i = 0;
                 b.iter(|| {
@@ -360,13 +362,7 @@ fn bench_real(
         tables: &scene_tables,
         navmesh: &navmesh,
     };
-    let tables: Vec<_> = walks
-        .iter()
-        .map(|t| {
-            let learned = LearnedField3::new(&net, &region, t.goal).expect("learned");
-            learned_table(&learned, &region).expect("table")
-        })
-        .collect();
+    let tables = learned_tables(&net, &region, &walks);
     let n = walks.len();
     for (name, planner) in [
         ("ours", PlannerKind::Ours),
