@@ -21,6 +21,67 @@ pub fn finite_median(v: &[f64]) -> Option<f64> {
     (n > 0).then(|| (f[(n - 1) / 2] + f[n / 2]) / 2.0)
 }
 
+/// One planner's outcomes on a set of pairs, summed up: what Table 3 gives over all pairs and
+/// Table 4 per kind of pair.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Summary {
+    /// Pairs.
+    pub pairs: usize,
+    /// Percent of the pairs reached (`None` for no pair).
+    pub reach_pct: Option<f64>,
+    /// Percent whose strict search opened every allowed point.
+    pub no_route_pct: Option<f64>,
+    /// Percent that took the fallback.
+    pub relaxed_pct: Option<f64>,
+    /// Mean distance from the path's end to the goal, metres.
+    pub dist_m: Option<f64>,
+    /// Mean seconds per path.
+    pub s: Option<f64>,
+    /// Median seconds per path.
+    pub s_median: Option<f64>,
+    /// Mean seconds of per-goal work.
+    pub goal_s: Option<f64>,
+    /// Mean seconds of per-room work.
+    pub room_s: Option<f64>,
+    /// Mean path ratio of the pairs reached.
+    pub path_ratio: Option<f64>,
+    /// Mean shares of the poses supported, collision-free, valid and implausible, percent.
+    pub support_pct: Option<f64>,
+    /// See [`Summary::support_pct`].
+    pub free_pct: Option<f64>,
+    /// See [`Summary::support_pct`].
+    pub valid_pct: Option<f64>,
+    /// See [`Summary::support_pct`] (`None` where the furniture is unknown).
+    pub implausible_pct: Option<f64>,
+}
+
+impl Summary {
+    /// The summary of `outcomes`.
+    pub fn of(outcomes: &[&Outcome]) -> Self {
+        let m = |f: &dyn Fn(&Outcome) -> f64| {
+            finite_mean(&outcomes.iter().map(|o| f(o)).collect::<Vec<_>>())
+        };
+        let pct = |f: &dyn Fn(&Outcome) -> bool| m(&|o| if f(o) { 100.0 } else { 0.0 });
+        let seconds: Vec<f64> = outcomes.iter().map(|o| o.seconds).collect();
+        Self {
+            pairs: outcomes.len(),
+            reach_pct: pct(&|o| o.reached),
+            no_route_pct: pct(&|o| o.no_route),
+            relaxed_pct: pct(&|o| o.relaxed),
+            dist_m: m(&|o| o.dist_m),
+            s: m(&|o| o.seconds),
+            s_median: finite_median(&seconds),
+            goal_s: m(&|o| o.goal_seconds),
+            room_s: m(&|o| o.room_seconds),
+            path_ratio: m(&|o| o.path_ratio),
+            support_pct: m(&|o| o.poses.support),
+            free_pct: m(&|o| o.poses.free),
+            valid_pct: m(&|o| o.poses.valid),
+            implausible_pct: m(&|o| o.poses.implausible),
+        }
+    }
+}
+
 /// Every planner's outcomes, by pair kind.
 #[derive(Clone, Debug, Default)]
 pub struct Tally {
@@ -87,39 +148,31 @@ impl Tally {
         );
         for &planner in planners {
             let name = planner.name();
-            let os = self.of(planner);
-            let n = os.len().max(1) as f64;
-            let pct =
-                |f: fn(&Outcome) -> bool| 100.0 * os.iter().filter(|o| f(o)).count() as f64 / n;
-            let m =
-                |f: fn(&Outcome) -> f64| finite_mean(&os.iter().map(|o| f(o)).collect::<Vec<_>>());
-            let reach = pct(|o| o.reached);
-            let (dist, secs, ratio) = (m(|o| o.dist_m), m(|o| o.seconds), m(|o| o.path_ratio));
-            let (goal_s, room_s) = (m(|o| o.goal_seconds), m(|o| o.room_seconds));
+            let sum = Summary::of(&self.of(planner));
+            let reach = sum.reach_pct.unwrap_or(0.0);
             line[format!("{name}_reach_pct")] = reach.into();
             if planner.field().is_some() {
-                line[format!("{name}_no_route_pct")] = pct(|o| o.no_route).into();
-                line[format!("{name}_relaxed_pct")] = pct(|o| o.relaxed).into();
+                line[format!("{name}_no_route_pct")] = sum.no_route_pct.unwrap_or(0.0).into();
+                line[format!("{name}_relaxed_pct")] = sum.relaxed_pct.unwrap_or(0.0).into();
             }
-            line[format!("{name}_dist_m")] = dist.into();
-            line[format!("{name}_s")] = secs.into();
-            let all: Vec<f64> = os.iter().map(|o| o.seconds).collect();
-            line[format!("{name}_s_median")] = finite_median(&all).into();
-            line[format!("{name}_goal_s")] = goal_s.into();
-            line[format!("{name}_room_s")] = room_s.into();
-            line[format!("{name}_path_ratio")] = ratio.into();
-            line[format!("{name}_support_pct")] = m(|o| o.poses.support).into();
-            line[format!("{name}_free_pct")] = m(|o| o.poses.free).into();
-            line[format!("{name}_valid_pct")] = m(|o| o.poses.valid).into();
-            line[format!("{name}_implausible_pct")] = m(|o| o.poses.implausible).into();
+            line[format!("{name}_dist_m")] = sum.dist_m.into();
+            line[format!("{name}_s")] = sum.s.into();
+            line[format!("{name}_s_median")] = sum.s_median.into();
+            line[format!("{name}_goal_s")] = sum.goal_s.into();
+            line[format!("{name}_room_s")] = sum.room_s.into();
+            line[format!("{name}_path_ratio")] = sum.path_ratio.into();
+            line[format!("{name}_support_pct")] = sum.support_pct.into();
+            line[format!("{name}_free_pct")] = sum.free_pct.into();
+            line[format!("{name}_valid_pct")] = sum.valid_pct.into();
+            line[format!("{name}_implausible_pct")] = sum.implausible_pct.into();
             let _ = writeln!(
                 text,
                 "{name:<12} {reach:>9.1} {:>10.3} {:>11.5} {:>11.5} {:>11.5} {:>11}",
-                dist.unwrap_or(f64::NAN),
-                secs.unwrap_or(f64::NAN),
-                goal_s.unwrap_or(f64::NAN),
-                room_s.unwrap_or(f64::NAN),
-                ratio.map_or("-".into(), |r| format!("{r:.3}"))
+                sum.dist_m.unwrap_or(f64::NAN),
+                sum.s.unwrap_or(f64::NAN),
+                sum.goal_s.unwrap_or(f64::NAN),
+                sum.room_s.unwrap_or(f64::NAN),
+                sum.path_ratio.map_or("-".into(), |r| format!("{r:.3}"))
             );
         }
         text
@@ -138,39 +191,30 @@ impl Tally {
                     .filter(|(p, _)| *p == planner)
                     .map(|(_, o)| o)
                     .collect();
-                let m = |f: fn(&Outcome) -> f64| {
-                    finite_mean(&os.iter().map(|o| f(o)).collect::<Vec<_>>())
-                };
-                let (s, f, v) = (
-                    m(|o| o.poses.support),
-                    m(|o| o.poses.free),
-                    m(|o| o.poses.valid),
-                );
-                let reach = m(|o| if o.reached { 100.0 } else { 0.0 });
+                let sum = Summary::of(&os);
                 let _ = writeln!(
                     text,
                     "{kind:<5} {:<12} {:>6.1} {:>6.1} {:>6.1}  ({} pairs, {:.0}% reached)",
                     planner.name(),
-                    s.unwrap_or(f64::NAN),
-                    f.unwrap_or(f64::NAN),
-                    v.unwrap_or(f64::NAN),
-                    os.len(),
-                    reach.unwrap_or(f64::NAN)
+                    sum.support_pct.unwrap_or(f64::NAN),
+                    sum.free_pct.unwrap_or(f64::NAN),
+                    sum.valid_pct.unwrap_or(f64::NAN),
+                    sum.pairs,
+                    sum.reach_pct.unwrap_or(f64::NAN)
                 );
-                let all: Vec<f64> = os.iter().map(|o| o.seconds).collect();
                 per.insert(
                     planner.name().into(),
                     json!({
-                        "support_pct": s,
-                        "free_pct": f,
-                        "valid_pct": v,
-                        "reach_pct": reach,
-                        "pairs": os.len(),
-                        "path_ratio": m(|o| o.path_ratio),
-                        "implausible_pct": m(|o| o.poses.implausible),
-                        "s": m(|o| o.seconds),
-                        "s_median": finite_median(&all),
-                        "goal_s": m(|o| o.goal_seconds),
+                        "support_pct": sum.support_pct,
+                        "free_pct": sum.free_pct,
+                        "valid_pct": sum.valid_pct,
+                        "reach_pct": sum.reach_pct,
+                        "pairs": sum.pairs,
+                        "path_ratio": sum.path_ratio,
+                        "implausible_pct": sum.implausible_pct,
+                        "s": sum.s,
+                        "s_median": sum.s_median,
+                        "goal_s": sum.goal_s,
                     }),
                 );
             }
