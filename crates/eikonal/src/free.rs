@@ -112,11 +112,13 @@ impl FreeCells3 {
     /// The number of `cell` among the free cells, or `None` for an obstacle or a cell outside
     /// the grid.
     pub fn number(&self, cell: Cell3) -> Option<usize> {
+        self.number_at(self.grid_index(cell)?)
+    }
+
+    /// The C-order index of `cell` in the grid, or `None` outside it.
+    fn grid_index(&self, cell: Cell3) -> Option<usize> {
         let [nx, ny, nz] = self.shape;
-        if cell.x >= nx || cell.y >= ny || cell.z >= nz {
-            return None;
-        }
-        self.number_at((cell.x * ny + cell.y) * nz + cell.z)
+        (cell.x < nx && cell.y < ny && cell.z < nz).then(|| (cell.x * ny + cell.y) * nz + cell.z)
     }
 
     /// The number of the cell at C-order `index` in the grid, or `None` for an obstacle or an
@@ -127,6 +129,13 @@ impl FreeCells3 {
             Some(&k) if k != u32::MAX => Some(k as usize),
             _ => None,
         }
+    }
+
+    /// The grid cell of free cell `number` (panics past [`FreeCells3::len`]).
+    pub fn cell(&self, number: usize) -> Cell3 {
+        let [_, ny, nz] = self.shape;
+        let i = self.index(number);
+        Cell3::new(i / (ny * nz), (i / nz) % ny, i % nz)
     }
 
     /// The grid's C-order index of free cell `number` (panics past [`FreeCells3::len`]).
@@ -171,14 +180,14 @@ impl FastMarching {
         let shape = format!("{nx}x{ny}x{nz}");
         let src = check_sources(
             sources,
-            |s| (s.x < nx && s.y < ny && s.z < nz).then(|| (s.x * ny + s.y) * nz + s.z),
+            |s| cells.grid_index(s),
             |i| cells.number_at(i).is_none(),
             None,
             &shape,
             |s, _| [s.x, s.y, s.z],
         )?;
         if let Some(stop) = options.stop_at {
-            if stop.x >= nx || stop.y >= ny || stop.z >= nz {
+            if cells.grid_index(stop).is_none() {
                 return Err(envfield_grid::GridError::OutOfBounds {
                     cell: stop.to_string(),
                     shape,
@@ -188,11 +197,7 @@ impl FastMarching {
         }
         crate::fmm::check_band(options.past_stop)?;
         let none = cells.len();
-        let record = |c: [usize; 3]| {
-            cells
-                .number_at((c[0] * ny + c[1]) * nz + c[2])
-                .unwrap_or(none)
-        };
+        let record = |c: [usize; 3]| cells.number(Cell3::new(c[0], c[1], c[2])).unwrap_or(none);
         Ok(march_free(
             &Problem {
                 dims: cells.shape,
@@ -263,7 +268,7 @@ mod tests {
                         let d = dense.get(c).unwrap();
                         match cells.number(c) {
                             Some(k) => {
-                                assert_eq!(cells.index(k), i);
+                                assert_eq!((cells.index(k), cells.cell(k)), (i, c));
                                 assert_eq!(d.to_bits(), free[k].to_bits(), "{c} {order:?}");
                             }
                             None => assert!(d.is_infinite()),

@@ -124,8 +124,6 @@ impl Links<3> for Table<'_> {
 struct Marcher<const N: usize, const ARITY: usize, L: Links<N>> {
     /// Where each record's neighbours are.
     links: L,
-    /// The dense lattice's strides, for the prefetches (empty table: none).
-    strides: [usize; N],
     /// Per cell: the accepted value (infinity for every other cell, so the stencil reads values
     /// without looking at the state) and the state tag. f32 keeps the working set small (the
     /// stencil is memory-bound on large grids); arithmetic is in f64. Tentative values live in
@@ -135,9 +133,10 @@ struct Marcher<const N: usize, const ARITY: usize, L: Links<N>> {
     tau: Option<Vec<f64>>,
     tau_uniform: f64,
     second_order: bool,
-    /// Prefetch the next cell's stencil rows (large grids only: on small ones every record is
-    /// in the cache already, and the prefetches only cost time).
-    prefetch: bool,
+    /// The dense lattice's strides, where the next cell's stencil rows are prefetched (large
+    /// dense grids only: on small ones, and over a table of free cells, every record is in the
+    /// cache already, and the prefetches only cost time).
+    prefetch: Option<[usize; N]>,
     heap: IndexedHeap<ARITY>,
 }
 
@@ -292,14 +291,14 @@ impl<const N: usize, const ARITY: usize, L: Links<N>> Marcher<N, ARITY, L> {
     /// front visits cells in order of value, not of address, and on large grids it outgrows
     /// the L2 cache (the gain is measured in `docs/performance.md`).
     #[inline(always)]
-    fn prefetch_around(&self, c: usize) {
+    fn prefetch_around(&self, c: usize, strides: [usize; N]) {
         #[cfg(target_arch = "x86_64")]
         {
             use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
             let base = self.recs.as_ptr();
             let reach = if self.second_order { 3 } else { 2 };
             for k in 0..N - 1 {
-                let s = self.strides[k];
+                let s = strides[k];
                 for d in 1..=reach {
                     // `wrapping_add`/`wrapping_sub`: a prefetch of an address outside the
                     // array is harmless (it is a hint and never faults), and no reference is
@@ -314,7 +313,7 @@ impl<const N: usize, const ARITY: usize, L: Links<N>> Marcher<N, ARITY, L> {
             }
         }
         #[cfg(not(target_arch = "x86_64"))]
-        let _ = c;
+        let _ = (c, strides);
     }
 
     /// The tentative value of cell `q` when its one accepted neighbour is `i`, its neighbour
@@ -458,12 +457,11 @@ fn march_with<const N: usize, const ARITY: usize>(p: &Problem<'_, N>, lat: Latti
     }
     let mut m = Marcher::<N, ARITY, _> {
         links: Strides(lat.strides),
-        strides: lat.strides,
         recs,
         tau,
         tau_uniform: p.spacing,
         second_order: p.second_order,
-        prefetch: lat.len >= LARGE_GRID,
+        prefetch: (lat.len >= LARGE_GRID).then_some(lat.strides),
         heap: IndexedHeap::new(),
     };
     m.run(p, |cell| lat.padded(cell));
@@ -507,12 +505,11 @@ pub(crate) fn march_free(
     // 17% faster than the 2-ary one, which the dense march keeps for its small grids.
     let mut m = Marcher::<3, 4, _> {
         links: Table(links),
-        strides: [0; 3],
         recs,
         tau: None,
         tau_uniform: p.spacing,
         second_order: p.second_order,
-        prefetch: false,
+        prefetch: None,
         heap: IndexedHeap::new(),
     };
     m.run(p, record);
@@ -528,7 +525,6 @@ impl<const N: usize, const ARITY: usize, L: Links<N>> Marcher<N, ARITY, L> {
     /// stop cell is accepted or its band is passed. `record` maps a cell of the grid to its
     /// record.
     fn run(&mut self, p: &Problem<'_, N>, record: impl Fn([usize; N]) -> usize) {
-        let m = self;
         // Exact initialisation around each source.
         let r = p.source_radius as isize;
         let mut frozen = Vec::new();
@@ -549,37 +545,37 @@ impl<const N: usize, const ARITY: usize, L: Links<N>> Marcher<N, ARITY, L> {
                     inside &= c >= 0 && (c as usize) < p.dims[k];
                     cell[k] = c.max(0) as usize;
                 }
-                if inside && line_of_sight(&m.recs, &record, *src, off) {
+                if inside && line_of_sight(&self.recs, &record, *src, off) {
                     let ci = record(cell);
                     let len = off.iter().map(|&o| (o * o) as f64).sum::<f64>().sqrt();
-                    let t = (len * 0.5 * (m.tau(si) + m.tau(ci))) as f32;
-                    if t < m.recs[ci].known {
-                        m.recs[ci].known = t;
+                    let t = (len * 0.5 * (self.tau(si) + self.tau(ci))) as f32;
+                    if t < self.recs[ci].known {
+                        self.recs[ci].known = t;
                     }
                     frozen.push(ci);
                 }
             }
         }
         for &i in &frozen {
-            m.recs[i].tag = KNOWN;
+            self.recs[i].tag = KNOWN;
         }
         let stop = p.stop_at.map(&record);
         let band = p.past_stop > 0.0;
         // A stop cell among the sources is known already: the march ends there, or its band
         // counts from its value.
-        let stop_known = stop.filter(|&s| m.recs[s].tag == KNOWN);
-        let mut limit = stop_known.map_or(f32::INFINITY, |s| m.recs[s].known + p.past_stop);
+        let stop_known = stop.filter(|&s| self.recs[s].tag == KNOWN);
+        let mut limit = stop_known.map_or(f32::INFINITY, |s| self.recs[s].known + p.past_stop);
         if band || stop_known.is_none() {
             for &i in &frozen {
-                m.update_neighbours(i);
+                self.update_neighbours(i);
             }
-            while let Some(entry) = m.heap.pop(&mut m.recs) {
+            while let Some(entry) = self.heap.pop(&mut self.recs) {
                 let (value, i) = unpack(entry);
                 if value > limit {
                     break;
                 }
                 let i = i as usize;
-                m.recs[i] = Rec {
+                self.recs[i] = Rec {
                     known: value,
                     tag: KNOWN,
                 };
@@ -589,12 +585,12 @@ impl<const N: usize, const ARITY: usize, L: Links<N>> Marcher<N, ARITY, L> {
                     }
                     limit = value + p.past_stop;
                 }
-                if m.prefetch {
-                    if let Some(next) = m.heap.peek_cell() {
-                        m.prefetch_around(next as usize);
+                if let Some(strides) = self.prefetch {
+                    if let Some(next) = self.heap.peek_cell() {
+                        self.prefetch_around(next as usize, strides);
                     }
                 }
-                m.update_neighbours(i);
+                self.update_neighbours(i);
             }
         }
     }

@@ -217,24 +217,23 @@ impl Field3 {
     /// # Errors
     /// As [`Field3::sample`].
     pub fn sample_finite(&self, p: Point3) -> Result<f32> {
-        sample_finite_by(self.shape, p, |i| self.values[i])
+        check_inside(self.shape, p)?;
+        Ok(sample_finite_within(self.shape, p, |i| self.values[i]))
     }
 
     /// The eight (value, trilinear weight) corners around `p`.
     fn corners(&self, p: Point3) -> Result<[(f32, f32); 8]> {
-        corners_by(self.shape, p, |i| self.values[i])
+        check_inside(self.shape, p)?;
+        Ok(corner_weights(self.shape, p).map(|(i, w)| (self.values[i], w)))
     }
 }
 
-/// [`Field3::sample_finite`] over a field of `shape` whose value at C-order index `i` is
-/// `at(i)`.
-#[inline]
-fn sample_finite_by(shape: [usize; 3], p: Point3, at: impl Fn(usize) -> f32) -> Result<f32> {
+/// Checks that `p` is finite and within a field of `shape` on every axis.
+fn check_inside(shape: [usize; 3], p: Point3) -> Result<()> {
     let [nx, ny, nz] = shape;
     check_point("x", p.x, nx)?;
     check_point("y", p.y, ny)?;
-    check_point("z", p.z, nz)?;
-    Ok(sample_finite_within(shape, p, at))
+    check_point("z", p.z, nz)
 }
 
 /// [`Field3::sample_finite`]'s arithmetic over a field of `shape` whose value at C-order index
@@ -246,27 +245,15 @@ fn sample_finite_by(shape: [usize; 3], p: Point3, at: impl Fn(usize) -> f32) -> 
 #[inline]
 pub fn sample_finite_within(shape: [usize; 3], p: Point3, at: impl Fn(usize) -> f32) -> f32 {
     let [nx, ny, nz] = shape;
-    let (x0, x1, fx) = split(p.x, nx);
-    let (y0, y1, fy) = split(p.y, ny);
-    let (z0, z1, fz) = split(p.z, nz);
-    let at = |x: usize, y: usize, z: usize| at((x * ny + y) * nz + z);
     // Half up is f32::round here for coordinates >= 0, without libm.
     let round = |v: f32, n: usize| ((v + 0.5) as usize).min(n - 1);
-    if !at(round(p.x, nx), round(p.y, ny), round(p.z, nz)).is_finite() {
+    if !at((round(p.x, nx) * ny + round(p.y, ny)) * nz + round(p.z, nz)).is_finite() {
         return f32::INFINITY;
     }
     let (mut acc, mut weight) = (0.0f32, 0.0f32);
-    for k in 0..8 {
-        let (bx, by, bz) = (k & 4 != 0, k & 2 != 0, k & 1 != 0);
-        let w = (if bx { fx } else { 1.0 - fx })
-            * (if by { fy } else { 1.0 - fy })
-            * (if bz { fz } else { 1.0 - fz });
+    for (i, w) in corner_weights(shape, p) {
         if w > 0.0 {
-            let v = at(
-                if bx { x1 } else { x0 },
-                if by { y1 } else { y0 },
-                if bz { z1 } else { z0 },
-            );
+            let v = at(i);
             if v.is_finite() {
                 acc += v * w;
                 weight += w;
@@ -277,31 +264,26 @@ pub fn sample_finite_within(shape: [usize; 3], p: Point3, at: impl Fn(usize) -> 
     acc / weight
 }
 
-/// The eight (value, trilinear weight) corners around `p` in a field of `shape` read by `at`.
+/// The C-order index and trilinear weight of each of the eight corners around `p` in a field
+/// of `shape` (every coordinate of `p` checked to lie within its axis).
 #[inline]
-fn corners_by(shape: [usize; 3], p: Point3, at: impl Fn(usize) -> f32) -> Result<[(f32, f32); 8]> {
+fn corner_weights(shape: [usize; 3], p: Point3) -> [(usize, f32); 8] {
     let [nx, ny, nz] = shape;
-    check_point("x", p.x, nx)?;
-    check_point("y", p.y, ny)?;
-    check_point("z", p.z, nz)?;
     let (x0, x1, fx) = split(p.x, nx);
     let (y0, y1, fy) = split(p.y, ny);
     let (z0, z1, fz) = split(p.z, nz);
-    let at = |x: usize, y: usize, z: usize| at((x * ny + y) * nz + z);
-    let mut corners = [(0.0f32, 0.0f32); 8];
-    for (k, corner) in corners.iter_mut().enumerate() {
+    std::array::from_fn(|k| {
         let (bx, by, bz) = (k & 4 != 0, k & 2 != 0, k & 1 != 0);
         let w = (if bx { fx } else { 1.0 - fx })
             * (if by { fy } else { 1.0 - fy })
             * (if bz { fz } else { 1.0 - fz });
-        let v = at(
+        let (x, y, z) = (
             if bx { x1 } else { x0 },
             if by { y1 } else { y0 },
             if bz { z1 } else { z0 },
         );
-        *corner = (v, w);
-    }
-    Ok(corners)
+        ((x * ny + y) * nz + z, w)
+    })
 }
 
 #[cfg(test)]

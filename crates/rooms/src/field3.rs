@@ -166,12 +166,8 @@ impl VoxelField3 {
             return Ok(self);
         }
         let goal = self.frame.center(self.goal);
-        for (k, &i) in self.cells.indices().iter().enumerate() {
-            let [nx, ny, nz] = self.frame.shape;
-            let i = i as usize;
-            debug_assert!(i < nx * ny * nz);
-            let c = Cell3::new(i / (ny * nz), (i / nz) % ny, i % nz);
-            let r = (self.frame.center(c) - goal).norm();
+        for k in 0..self.cells.len() {
+            let r = (self.frame.center(self.cells.cell(k)) - goal).norm();
             if r < radius {
                 let t = r / radius;
                 let w = t * t * (3.0 - 2.0 * t);
@@ -280,8 +276,8 @@ impl<'a> LearnedField3<'a> {
         }
         let cells = region.free_cells()?;
         let mut queries = Vec::with_capacity(3 * cells.len());
-        for &i in cells.indices() {
-            let c = region.grid.cell(i as usize);
+        for k in 0..cells.len() {
+            let c = cells.cell(k);
             queries.extend([c.x as f32, c.y as f32, c.z as f32]);
         }
         let raw = self.net.predict_encoded(&self.batch_of(queries))?;
