@@ -159,6 +159,25 @@ impl Shared<'_> {
     }
 }
 
+impl Shared<'_> {
+    /// One path of `planner` on pair `t` at room_nav's budget (50 expansions per step): ours
+    /// on the exact field marches it inside the call, ours on the learned field reads `table`.
+    fn plan_marching(&self, planner: PlannerKind, t: &Timed, table: Option<&VoxelField3>) -> bool {
+        match planner {
+            PlannerKind::OursExact => {
+                let field = ExactField3::toward(self.region, t.goal, t.pair.start, EXACT_BAND)
+                    .expect("field");
+                self.plan(planner, t, Some(&field), 50.0)
+            }
+            PlannerKind::Ours => {
+                let table = table.expect("ours needs its learned table");
+                self.plan(planner, t, Some(table), 50.0)
+            }
+            _ => self.plan(planner, t, None, 50.0),
+        }
+    }
+}
+
 fn bench_rooms(c: &mut Criterion) {
     let models = Path::new(env!("CARGO_MANIFEST_DIR")).join("models");
     let vae = Cvae::load(models.join("vae_gated.safetensors")).expect("the shipped VAE");
@@ -259,11 +278,7 @@ fn bench_rooms(c: &mut Criterion) {
                 let t = &walks[k];
                 // room_nav's budget: 50 expansions per step of the shortest walk.
                 match name {
-                    "ours_exact_with_goal" => {
-                        let field = ExactField3::toward(&region, t.goal, t.pair.start, EXACT_BAND)
-                            .expect("field");
-                        walking.plan(planner, t, Some(&field), 50.0)
-                    }
+                    "ours_exact_with_goal" => walking.plan_marching(planner, t, None),
                     "ours_raw" => {
                         let field = LearnedField3::new(&net, &region, t.goal).expect("learned");
                         walking.plan(planner, t, Some(&field), 50.0)
@@ -307,16 +322,7 @@ fn bench_rooms(c: &mut Criterion) {
                     i += 1;
                     let t = &sits[k];
                     // room_nav's sit-down budget: 50 expansions per step.
-                    match planner {
-                        PlannerKind::OursExact => {
-                            let field =
-                                ExactField3::toward(&region, t.goal, t.pair.start, EXACT_BAND)
-                                    .expect("field");
-                            walking.plan(planner, t, Some(&field), 50.0)
-                        }
-                        PlannerKind::Ours => walking.plan(planner, t, Some(&tables[k]), 50.0),
-                        _ => walking.plan(planner, t, None, 50.0),
-                    }
+                    walking.plan_marching(planner, t, tables.get(k))
                 })
             });
         }
@@ -375,15 +381,7 @@ fn bench_real(
                 let k = i % n;
                 i += 1;
                 let t = &walks[k];
-                match planner {
-                    PlannerKind::OursExact => {
-                        let field = ExactField3::toward(&region, t.goal, t.pair.start, EXACT_BAND)
-                            .expect("field");
-                        shared.plan(planner, t, Some(&field), 50.0)
-                    }
-                    PlannerKind::Ours => shared.plan(planner, t, Some(&tables[k]), 50.0),
-                    _ => shared.plan(planner, t, None, 50.0),
-                }
+                shared.plan_marching(planner, t, tables.get(k))
             })
         });
     }
