@@ -39,6 +39,10 @@ impl StepFilter for AccessibleRegion {
         Ok(candidates.iter().map(|&c| self.contains(c)).collect())
     }
 
+    fn keep_one(&self, _: usize, _: Point3m, c: Point3m) -> envfield_plan::Result<bool> {
+        Ok(self.contains(c))
+    }
+
     fn may_keep(&self, p: Point3m) -> bool {
         self.contains(p)
     }
@@ -203,28 +207,30 @@ impl StepFilter for PoseFilter<'_> {
     ) -> envfield_plan::Result<Vec<bool>> {
         candidates
             .iter()
-            .map(|&c| {
-                if !self.region.contains(c) {
-                    return Ok(false);
-                }
-                let f = self.frame_at(step, c);
-                let support = self.sequence.supports[f];
-                let pose = self.frame_placed(f, from, c);
-                let valid = match self.tables {
-                    Some(t) => pose_valid(&t.distances, &pose, support, &self.affordance),
-                    None => pose_valid(self.scene, &pose, support, &self.affordance),
-                }
-                .map_err(|e| PlanError::Invalid(format!("pose check: {e}")))?;
-                if !(valid && self.clear_beneath && support == Support::Standing) {
-                    return Ok(valid);
-                }
-                match self.tables {
-                    Some(t) => clear_beneath(&t.beneath, &pose),
-                    None => clear_beneath(self.scene, &pose),
-                }
-                .map_err(|e| PlanError::Invalid(format!("pose check: {e}")))
-            })
+            .map(|&c| self.keep_one(step, from, c))
             .collect()
+    }
+
+    fn keep_one(&self, step: usize, from: Point3m, c: Point3m) -> envfield_plan::Result<bool> {
+        if !self.region.contains(c) {
+            return Ok(false);
+        }
+        let f = self.frame_at(step, c);
+        let support = self.sequence.supports[f];
+        let pose = self.frame_placed(f, from, c);
+        let valid = match self.tables {
+            Some(t) => pose_valid(&t.distances, &pose, support, &self.affordance),
+            None => pose_valid(self.scene, &pose, support, &self.affordance),
+        }
+        .map_err(|e| PlanError::Invalid(format!("pose check: {e}")))?;
+        if !(valid && self.clear_beneath && support == Support::Standing) {
+            return Ok(valid);
+        }
+        match self.tables {
+            Some(t) => clear_beneath(&t.beneath, &pose),
+            None => clear_beneath(self.scene, &pose),
+        }
+        .map_err(|e| PlanError::Invalid(format!("pose check: {e}")))
     }
 
     fn may_keep(&self, p: Point3m) -> bool {

@@ -22,6 +22,15 @@ pub trait StepFilter {
     /// When the check itself fails (a bad point, a failing scene query).
     fn keep(&self, step: usize, from: Point3m, candidates: &[Point3m]) -> Result<Vec<bool>>;
 
+    /// [`StepFilter::keep`] of one candidate, `to`: what a search asks of each step it takes.
+    /// A filter may answer it without the list's allocation.
+    ///
+    /// # Errors
+    /// As [`StepFilter::keep`].
+    fn keep_one(&self, step: usize, from: Point3m, to: Point3m) -> Result<bool> {
+        Ok(self.keep(step, from, &[to])?[0])
+    }
+
     /// Whether `p` could be allowed at all, whatever the step: a cheap necessary condition
     /// (the free space alone, before any pose), which a caller with many points to check
     /// asks of them all first. Every point, unless the filter says otherwise.

@@ -111,14 +111,17 @@ impl FieldSearch3 {
         // The opened points: position, parent and depth (the index along its chain).
         let mut nodes: Vec<Node> = Vec::new();
         // Each expansion's candidates with finite values, in increasing value (ties in the
-        // directions' order), in `pending[first..first + len]`; the open list holds each
+        // directions' order; the best first, the rest sorted when the second is asked for),
+        // in `pending[first..first + len]`; the open list holds each
         // expansion's best candidate not yet taken, and taking one puts its next on the list.
         // This is the order in which a list of every candidate would give them up, at a
         // fraction of the list's work: a clear descent takes one candidate per expansion.
         let mut expansions: Vec<Expansion> = Vec::new();
         let mut pending: Vec<(f32, Point3m)> = Vec::new();
         let mut opened: HashSet<u64, BuildHasherDefault<LatticeHasher>> = HashSet::default();
-        let mut open: BinaryHeap<Reverse<(Order, usize, usize)>> = BinaryHeap::new();
+        // Each entry (value, expansion, candidate) packed into one ordered word: the heap's
+        // compares are then one integer compare, in the tuple's order.
+        let mut open: BinaryHeap<Reverse<u128>> = BinaryHeap::new();
         let mut nearest = (f32::INFINITY, 0usize);
         let mut end = None;
         let mut exhausted = false;
@@ -128,14 +131,21 @@ impl FieldSearch3 {
         loop {
             // The next point: the start first, then the best candidate on the list.
             let (here, parent, depth) = if started {
-                let Some(Reverse((_, e, k))) = open.pop() else {
+                let Some(Reverse(entry)) = open.pop() else {
                     exhausted = true;
                     break;
                 };
-                let x: &Expansion = &expansions[e];
+                let (e, k) = unpack_open(entry);
+                let x = &mut expansions[e];
                 if k + 1 < x.len {
+                    if !x.sorted {
+                        // Its second candidate is asked for: the rest is sorted now (most
+                        // expansions of a clear descent give up their best alone).
+                        pending[x.first + 1..x.first + x.len].sort_by(|a, b| a.0.total_cmp(&b.0));
+                        x.sorted = true;
+                    }
                     let (v, _) = pending[x.first + k + 1];
-                    open.push(Reverse((Order(v), e, k + 1)));
+                    open.push(Reverse(pack_open(v, e, k + 1)));
                 }
                 (pending[x.first + k].1, x.parent, nodes[x.parent].depth + 1)
             } else {
@@ -152,7 +162,7 @@ impl FieldSearch3 {
                     break;
                 }
                 checks += 1;
-                if !filter.keep(depth - 1, nodes[parent].at, &[here])?[0] {
+                if !filter.keep_one(depth - 1, nodes[parent].at, here)? {
                     continue;
                 }
             }
@@ -171,7 +181,7 @@ impl FieldSearch3 {
                 end = Some(n);
                 break;
             }
-            if d <= s && filter.keep(depth, here, &[goal])?[0] {
+            if d <= s && filter.keep_one(depth, here, goal)? {
                 nodes.push(Node {
                     at: goal,
                     parent: n,
@@ -198,15 +208,21 @@ impl FieldSearch3 {
                     .filter(|&(_, v)| v.is_finite())
                     .map(|(&c, v)| (v, c)),
             );
-            // Stable: equal values keep the directions' order.
-            pending[first..].sort_by(|a, b| a.0.total_cmp(&b.0));
             let len = pending.len() - first;
             if len > 0 {
-                open.push(Reverse((Order(pending[first].0), expansions.len(), 0)));
+                // The best candidate first (the first of the least values, where a stable sort
+                // puts it), the rest in the directions' order until one of them is asked for,
+                // then sorted stably: the order a stable sort of them all gives.
+                let best = (first..pending.len())
+                    .min_by(|&a, &b| pending[a].0.total_cmp(&pending[b].0))
+                    .expect("a candidate");
+                pending[first..=best].rotate_right(1);
+                open.push(Reverse(pack_open(pending[first].0, expansions.len(), 0)));
                 expansions.push(Expansion {
                     parent: n,
                     first,
                     len,
+                    sorted: len <= 2,
                 });
             }
         }
@@ -342,7 +358,7 @@ impl FieldSearch3 {
         }
         let mut prev = from;
         for (k, &p) in steps.iter().enumerate() {
-            if !filter.keep(so_far.len() - 1 + k, prev, &[p])?[0] {
+            if !filter.keep_one(so_far.len() - 1 + k, prev, p)? {
                 return Ok(None);
             }
             prev = p;
@@ -377,24 +393,29 @@ struct Expansion {
     parent: usize,
     first: usize,
     len: usize,
+    /// Whether `pending[first + 1..first + len]` is sorted yet (the best is first always).
+    sorted: bool,
 }
 
-/// An f32 ordered by `total_cmp`, for the open list.
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct Order(f32);
-
-impl Eq for Order {}
-
-impl PartialOrd for Order {
-    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
-        Some(self.cmp(other))
-    }
+/// An open-list entry: `value` in `f32::total_cmp`'s order (its bits, the sign bit flipped
+/// for positives and every bit for negatives), then the expansion `e` and its candidate `k`,
+/// in one word ordered as the triple.
+fn pack_open(value: f32, e: usize, k: usize) -> u128 {
+    let bits = value.to_bits();
+    let ordered = if bits >> 31 == 1 {
+        !bits
+    } else {
+        bits | 0x8000_0000
+    };
+    (u128::from(ordered) << 96) | ((e as u128) << 32) | k as u128
 }
 
-impl Ord for Order {
-    fn cmp(&self, other: &Self) -> std::cmp::Ordering {
-        self.0.total_cmp(&other.0)
-    }
+/// The expansion and candidate of an open-list entry ([`pack_open`]).
+fn unpack_open(entry: u128) -> (usize, usize) {
+    (
+        (entry >> 32) as u64 as usize,
+        (entry & 0xFFFF_FFFF) as usize,
+    )
 }
 
 /// The field at every candidate in one call; a batch that fails (a point outside the field's
@@ -598,6 +619,79 @@ mod tests {
         assert!(free.reached && !free.relaxed);
         for (k, w) in free.points.windows(2).enumerate() {
             assert!(Pocket.keep(k, w[0], &[w[1]]).unwrap()[0]);
+        }
+    }
+
+    /// Where every candidate ties (a flat field), the search takes them in the directions'
+    /// order, the oldest expansion's first: the start's 26 candidates are checked before any
+    /// of its children's.
+    #[test]
+    fn tied_candidates_come_off_in_the_directions_order() {
+        struct Flat;
+        impl ContinuousField3 for Flat {
+            fn value(&self, _: Point3m) -> envfield_grid::Result<f32> {
+                Ok(1.0)
+            }
+            fn gradient(&self, _: Point3m) -> envfield_grid::Result<Option<Point3m>> {
+                Ok(None)
+            }
+        }
+        struct Record(std::cell::RefCell<Vec<Point3m>>);
+        impl StepFilter for Record {
+            fn keep(&self, _: usize, _: Point3m, c: &[Point3m]) -> Result<Vec<bool>> {
+                self.0.borrow_mut().extend_from_slice(c);
+                Ok(vec![true; c.len()])
+            }
+        }
+        let search = FieldSearch3 {
+            step: 0.1,
+            tolerance: 0.02,
+            max_steps: 40,
+            max_checks: 0,
+        };
+        let record = Record(Default::default());
+        search
+            .search(&Flat, &record, [0.0; 3], [5.0, 0.0, 0.0])
+            .unwrap();
+        let checked = record.0.into_inner();
+        assert!(checked.len() > 26);
+        for (k, d) in directions26().iter().enumerate() {
+            let want = d.map(|v| 0.1 * v);
+            assert!(distance(checked[k], want) < 1e-6, "{k}: {:?}", checked[k]);
+        }
+    }
+
+    /// The open list's packed entries order as the (value by `total_cmp`, expansion,
+    /// candidate) triples they pack, negative values, zeros and infinities included.
+    #[test]
+    fn open_entries_order_as_their_triples() {
+        let values = [
+            f32::NEG_INFINITY,
+            -3.5,
+            -1e-30,
+            -0.0,
+            0.0,
+            1e-30,
+            0.25,
+            0.2500001,
+            7.0,
+            f32::INFINITY,
+        ];
+        let mut triples = Vec::new();
+        for &v in &values {
+            for e in [0usize, 1, 70_000, 1 << 40] {
+                for k in [0usize, 1, 25] {
+                    triples.push((v, e, k));
+                }
+            }
+        }
+        for &a in &triples {
+            for &b in &triples {
+                let want = a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2));
+                let (pa, pb) = (pack_open(a.0, a.1, a.2), pack_open(b.0, b.1, b.2));
+                assert_eq!(pa.cmp(&pb), want, "{a:?} {b:?}");
+            }
+            assert_eq!(unpack_open(pack_open(a.0, a.1, a.2)), (a.1, a.2));
         }
     }
 
