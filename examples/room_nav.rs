@@ -34,6 +34,7 @@ use envfield::scene::{
 };
 use envfield::vae::Cvae;
 use indicatif::{ProgressBar, ProgressStyle};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -117,6 +118,15 @@ struct Args {
     /// The summary as one JSON line only.
     #[arg(long)]
     json: bool,
+    /// Only these planners, comma separated (ours, ours_raw, ours_noaff, ours_exact, rrt,
+    /// rrtstar, rrtstar_big, prm, line, navmesh); every one by default.
+    #[arg(long, value_delimiter = ',')]
+    planners: Option<Vec<PlannerKind>>,
+    /// Write one JSON line per pair and planner here (room, pair, kind, planner, seconds,
+    /// its goal's seconds, reached, relaxed, valid share, path ratio, distance left): where a
+    /// mean's time goes, walk by walk.
+    #[arg(long)]
+    walks_out: Option<PathBuf>,
 }
 
 /// Sweet Home 3D's catalogue, fetched by scripts/fetch_sweethome3d.sh.
@@ -258,7 +268,23 @@ fn main() -> Result<()> {
     let vae =
         Cvae::load(&vae_file).with_context(|| format!("loading the VAE {}", vae_file.display()))?;
     let catalogue = args.catalogue.then(open_catalogue).transpose()?;
-    let planners = PlannerKind::ALL;
+    let planners: Vec<PlannerKind> = match &args.planners {
+        Some(p) if p.is_empty() => bail!("--planners: name one planner at least"),
+        Some(p) => PlannerKind::ALL
+            .into_iter()
+            .filter(|k| p.contains(k))
+            .collect(),
+        None => PlannerKind::ALL.to_vec(),
+    };
+    let mut walks_out = args
+        .walks_out
+        .as_ref()
+        .map(|p| {
+            std::fs::File::create(p)
+                .map(std::io::BufWriter::new)
+                .with_context(|| format!("--walks-out: creating {}", p.display()))
+        })
+        .transpose()?;
     let mut tally = Tally::default();
     let mut field_s = Vec::new();
     let (mut region_s, mut memory) = (Vec::new(), Vec::new());
@@ -293,7 +319,8 @@ fn main() -> Result<()> {
         let (tables, tables_s) = RoomContext::tables(&scene)?;
         let mesh = Navmesh::for_room(&scene, &walk(&WalkConfig::default(), seed)?, seed);
         let room_planners: Vec<PlannerKind> = planners
-            .into_iter()
+            .iter()
+            .copied()
             .filter(|&p| p != PlannerKind::Navmesh || mesh.is_some())
             .collect();
         let room = RoomContext {
@@ -321,6 +348,19 @@ fn main() -> Result<()> {
             if k == 0 && i == 0 {
                 write_run_files(&args.out, &scene, &region, &runs)?;
             }
+            if let Some(w) = walks_out.as_mut() {
+                for r in &runs {
+                    let o = &r.outcome;
+                    let line = serde_json::json!({
+                        "room": seed, "pair": i, "kind": format!("{:?}", pair.kind),
+                        "planner": r.planner.name(), "seconds": o.seconds,
+                        "goal_seconds": o.goal_seconds, "reached": o.reached,
+                        "relaxed": o.relaxed, "valid": o.poses.valid,
+                        "path_ratio": o.path_ratio, "dist_m": o.dist_m,
+                    });
+                    writeln!(w, "{line}").context("--walks-out: writing")?;
+                }
+            }
             match &generated {
                 Some(r) => tally.add_in(pair.kind, &runs, r)?,
                 None => tally.add(pair.kind, &runs),
@@ -342,6 +382,9 @@ fn main() -> Result<()> {
         print!("{table3}");
         println!("\nTable 4: aligned poses, percent supported / collision-free / valid");
         print!("{table4}");
+    }
+    if let Some(mut w) = walks_out {
+        w.flush().context("--walks-out: writing")?;
     }
     println!("{line}");
     Ok(())

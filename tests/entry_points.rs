@@ -275,6 +275,7 @@ fn the_room_trainers_keep_the_file_and_refuse_absurd_counts() {
 }
 
 /// Issue 36, cases 9-11, 14 and 17: no pairs, an untrained field, a seed range that wraps,
+/// an unknown planner, a per-walk log that cannot be written,
 /// an absurd heading count and a room a hundred metres wide are refused, not run.
 #[test]
 fn room_nav_and_birdseye_refuse_empty_runs_wrapping_seeds_and_huge_rooms() {
@@ -290,6 +291,18 @@ fn room_nav_and_birdseye_refuse_empty_runs_wrapping_seeds_and_huge_rooms() {
         refuses(
             run(&nav, &["--seed", huge, "--rooms", "2", "--out", &out]),
             "64 bits",
+        );
+        refuses(
+            run(&nav, &["--planners", "ours,astar", "--out", &out]),
+            "unknown planner `astar`",
+        );
+        let nowhere = dir.join("no/such/folder/walks.jsonl");
+        refuses(
+            run(
+                &nav,
+                &["--walks-out", &nowhere.to_string_lossy(), "--out", &out],
+            ),
+            "--walks-out",
         );
     }
     if let Some(crowd) = example("birdseye_multi") {

@@ -137,6 +137,7 @@ impl PlannerKind {
                 };
                 let paper = FieldSearch3 {
                     max_checks: 0,
+                    near_stall: 0,
                     ..*search
                 };
                 paper.search(field()?, &exact, start, goal)?
@@ -617,6 +618,7 @@ impl<'a> PairSetup<'a> {
                     tolerance: 0.02,
                     max_steps,
                     max_checks: 2 * max_steps,
+                    near_stall: NEAR_STALL,
                 }
             },
             sampling: SamplingConfig {
@@ -629,6 +631,14 @@ impl<'a> PairSetup<'a> {
         }
     }
 }
+
+/// Pose checks at most without coming nearer the goal once ours' strict search is within two
+/// steps of it ([`FieldSearch3::near_stall`]), before ours falls back to the region alone: a
+/// goal a body fits only at a few frames and headings is come close to early, and the search
+/// would otherwise spend its whole budget on the rest of the room. Set above the longest such
+/// run of any strict search that went on to land (`docs/performance.md`), so it ends only
+/// searches that would have failed.
+pub const NEAR_STALL: usize = 2500;
 
 /// How far past a pair's start ours' exact field is marched, metres
 /// ([`ExactField3::toward`]): room for the search to go round what the poses refuse, at a

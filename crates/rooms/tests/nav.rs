@@ -87,6 +87,7 @@ fn only_the_search_with_affordance_keeps_every_pose_valid() {
         tolerance: 0.02,
         max_steps: 2000,
         max_checks: 0,
+        near_stall: 0,
     };
     let ours = search.search(&field, &filter, start, goal).unwrap();
     assert!(

@@ -56,6 +56,13 @@ pub struct FieldSearch3 {
     /// expansions slowly and its checks fast; this stops it there.
     #[serde(default)]
     pub max_checks: usize,
+    /// Filter calls at most without coming nearer the goal, once the search has opened a
+    /// point within two steps of it; 0 for no limit. A goal that a body fits only at a few
+    /// frames of its gait and headings is come close to early and never landed on; past
+    /// this many refusals in a row near it, the search ends there rather than spend its
+    /// budget on the rest of the room.
+    #[serde(default)]
+    pub near_stall: usize,
 }
 
 impl FieldSearch3 {
@@ -70,8 +77,9 @@ impl FieldSearch3 {
     /// step would collide), the search goes on from the best point left instead of stopping.
     /// When the goal lies within `s` and the filter allows it, the path lands on it. The path
     /// is the chain of steps from the start to the point it ends on: the goal, or after
-    /// `max_steps` expansions (or `max_checks` filter calls) the opened point nearest the goal
-    /// (then `reached` is false). A step's filter call gets the step's index along that chain.
+    /// `max_steps` expansions (or `max_checks` filter calls, or `near_stall` of them near the
+    /// goal without coming nearer) the opened point nearest the goal (then `reached` is
+    /// false). A step's filter call gets the step's index along that chain.
     ///
     /// # Errors
     /// [`PlanError::Invalid`] for a step, tolerance or point that is not positive / finite;
@@ -123,6 +131,8 @@ impl FieldSearch3 {
         // compares are then one integer compare, in the tuple's order.
         let mut open: BinaryHeap<Reverse<u128>> = BinaryHeap::new();
         let mut nearest = (f32::INFINITY, 0usize);
+        // The filter calls made when the search last came nearer the goal.
+        let mut nearer_at = 0;
         let mut end = None;
         let mut exhausted = false;
         let (mut expanded, mut checks) = (0, 0);
@@ -161,6 +171,12 @@ impl FieldSearch3 {
                 if self.max_checks > 0 && checks == self.max_checks {
                     break;
                 }
+                let stalled = self.near_stall > 0
+                    && nearest.0 <= 2.0 * s
+                    && checks - nearer_at >= self.near_stall;
+                if stalled {
+                    break;
+                }
                 checks += 1;
                 if !filter.keep_one(depth - 1, nodes[parent].at, here)? {
                     continue;
@@ -176,6 +192,7 @@ impl FieldSearch3 {
             let d = distance(here, goal);
             if d < nearest.0 {
                 nearest = (d, n);
+                nearer_at = checks;
             }
             if d <= self.tolerance {
                 end = Some(n);
@@ -471,6 +488,7 @@ mod tests {
             tolerance: 0.02,
             max_steps: 100_000,
             max_checks: 0,
+            near_stall: 0,
         };
         let path = search.search(&Cone(goal), &Cube, [0.0; 3], goal).unwrap();
         assert!(!path.reached && path.exhausted, "{path:?}");
@@ -489,6 +507,7 @@ mod tests {
             tolerance: 0.02,
             max_steps: 200,
             max_checks: 0,
+            near_stall: 0,
         };
         let path = search
             .search(&Cone(goal), &AnyStep, [0.0, 0.0, 1.0], goal)
@@ -515,6 +534,7 @@ mod tests {
             tolerance: 0.02,
             max_steps: 100,
             max_checks: 0,
+            near_stall: 0,
         };
         let path = search
             .search(&Cone(goal), &Above(0.5), [0.0, 0.0, 1.0], goal)
@@ -558,6 +578,7 @@ mod tests {
             tolerance: 0.02,
             max_steps: 10_000,
             max_checks: 0,
+            near_stall: 0,
         };
         let raw = search.search(&Cone(goal), &Outside, start, goal).unwrap();
         assert!(raw.reached, "{raw:?}");
@@ -603,6 +624,7 @@ mod tests {
             tolerance: 0.02,
             max_steps: 5_000,
             max_checks: 0,
+            near_stall: 0,
         };
         let strict = search.search(&Cone(goal), &Pocket, [0.0; 3], goal).unwrap();
         assert!(!strict.reached);
@@ -620,6 +642,53 @@ mod tests {
         for (k, w) in free.points.windows(2).enumerate() {
             assert!(Pocket.keep(k, w[0], &[w[1]]).unwrap()[0]);
         }
+    }
+
+    /// A goal the filter never lets a step land on, in open space: without a limit the search
+    /// spends its whole budget of checks on the space round it; with `near_stall` it ends
+    /// that many checks after it last came nearer, close to the goal.
+    #[test]
+    fn a_goal_no_step_lands_on_ends_the_search_near_it() {
+        struct Barred(std::cell::Cell<usize>);
+        impl StepFilter for Barred {
+            fn keep(&self, _: usize, _: Point3m, c: &[Point3m]) -> Result<Vec<bool>> {
+                self.0.set(self.0.get() + c.len());
+                // Nothing within 3 cm of the goal.
+                Ok(c.iter()
+                    .map(|&p| distance(p, [1.0, 0.0, 0.0]) > 0.03)
+                    .collect())
+            }
+        }
+        let goal = [1.0, 0.0, 0.0];
+        let search = FieldSearch3 {
+            step: 0.05,
+            tolerance: 0.02,
+            max_steps: 100_000,
+            max_checks: 5_000,
+            near_stall: 0,
+        };
+        let calls = |near_stall: usize| {
+            let filter = Barred(Default::default());
+            let s = FieldSearch3 {
+                near_stall,
+                ..search
+            };
+            let path = s.search(&Cone(goal), &filter, [0.0; 3], goal).unwrap();
+            assert!(!path.reached && !path.exhausted, "{path:?}");
+            assert!(path.final_distance < 0.1, "{path:?}");
+            filter.0.get()
+        };
+        // The landing tries count too: a few more calls than the budget's checks.
+        let (all, limited) = (calls(0), calls(100));
+        assert!(all >= 5_000, "{all}");
+        assert!(limited < 1_000, "{limited}");
+        // Where the goal is reached, the limit changes nothing.
+        let open = FieldSearch3 {
+            near_stall: 100,
+            ..search
+        };
+        let path = open.search(&Cone(goal), &AnyStep, [0.0; 3], goal).unwrap();
+        assert!(path.reached);
     }
 
     /// Where every candidate ties (a flat field), the search takes them in the directions'
@@ -648,6 +717,7 @@ mod tests {
             tolerance: 0.02,
             max_steps: 40,
             max_checks: 0,
+            near_stall: 0,
         };
         let record = Record(Default::default());
         search
