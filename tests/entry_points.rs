@@ -46,6 +46,14 @@ fn refuses(out: Output, expect: &str) {
     assert!(!stderr.contains("panicked"), "{stderr}");
 }
 
+/// Runs `args` and asserts clap's refusal of a bad flag: exit status 2 and `expect` in the
+/// message.
+fn refuses_usage(out: Output, expect: &str) {
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "not a usage error:\n{stderr}");
+    assert!(stderr.contains(expect), "expected `{expect}` in:\n{stderr}");
+}
+
 fn run(bin: &Path, args: &[&str]) -> Output {
     Command::new(bin)
         .args(args)
@@ -292,7 +300,7 @@ fn room_nav_and_birdseye_refuse_empty_runs_wrapping_seeds_and_huge_rooms() {
             run(&nav, &["--seed", huge, "--rooms", "2", "--out", &out]),
             "64 bits",
         );
-        refuses(
+        refuses_usage(
             run(&nav, &["--planners", "ours,astar", "--out", &out]),
             "unknown planner `astar`",
         );
