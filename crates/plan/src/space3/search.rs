@@ -452,6 +452,17 @@ mod tests {
     use super::super::{straight_line, AnyStep};
     use super::*;
 
+    /// A search of step `step` and `max_steps` expansions, 2 cm from its goal, no other limit.
+    fn settings(step: f32, max_steps: usize) -> FieldSearch3 {
+        FieldSearch3 {
+            step,
+            tolerance: 0.02,
+            max_steps,
+            max_checks: 0,
+            near_stall: 0,
+        }
+    }
+
     /// The distance to a goal point in open space.
     struct Cone(Point3m);
 
@@ -483,13 +494,7 @@ mod tests {
             }
         }
         let goal = [1.0, 0.0, 0.0];
-        let search = FieldSearch3 {
-            step: 0.1,
-            tolerance: 0.02,
-            max_steps: 100_000,
-            max_checks: 0,
-            near_stall: 0,
-        };
+        let search = settings(0.1, 100_000);
         let path = search.search(&Cone(goal), &Cube, [0.0; 3], goal).unwrap();
         assert!(!path.reached && path.exhausted, "{path:?}");
         assert!((path.final_distance - 0.7).abs() < 0.05, "{path:?}");
@@ -502,13 +507,7 @@ mod tests {
     #[test]
     fn the_search_walks_a_cone_to_its_goal_near_the_straight_line() {
         let goal = [2.0, 1.0, 1.0];
-        let search = FieldSearch3 {
-            step: 0.1,
-            tolerance: 0.02,
-            max_steps: 200,
-            max_checks: 0,
-            near_stall: 0,
-        };
+        let search = settings(0.1, 200);
         let path = search
             .search(&Cone(goal), &AnyStep, [0.0, 0.0, 1.0], goal)
             .unwrap();
@@ -529,13 +528,7 @@ mod tests {
     #[test]
     fn the_filter_is_obeyed_and_a_dead_end_stops_the_walk() {
         let goal = [1.0, 0.0, 0.0];
-        let search = FieldSearch3 {
-            step: 0.1,
-            tolerance: 0.02,
-            max_steps: 100,
-            max_checks: 0,
-            near_stall: 0,
-        };
+        let search = settings(0.1, 100);
         let path = search
             .search(&Cone(goal), &Above(0.5), [0.0, 0.0, 1.0], goal)
             .unwrap();
@@ -573,13 +566,7 @@ mod tests {
             }
         }
         let (start, goal) = ([0.0, 0.0, 1.0], [1.0, 0.0, 1.0]);
-        let search = FieldSearch3 {
-            step: 0.05,
-            tolerance: 0.02,
-            max_steps: 10_000,
-            max_checks: 0,
-            near_stall: 0,
-        };
+        let search = settings(0.05, 10_000);
         let raw = search.search(&Cone(goal), &Outside, start, goal).unwrap();
         assert!(raw.reached, "{raw:?}");
         let cut = search.shortcut(&Outside, &raw, goal).unwrap();
@@ -619,13 +606,7 @@ mod tests {
             }
         }
         let goal = [1.0, 0.0, 0.0];
-        let search = FieldSearch3 {
-            step: 0.1,
-            tolerance: 0.02,
-            max_steps: 5_000,
-            max_checks: 0,
-            near_stall: 0,
-        };
+        let search = settings(0.1, 5_000);
         let strict = search.search(&Cone(goal), &Pocket, [0.0; 3], goal).unwrap();
         assert!(!strict.reached);
         let path = search
@@ -661,11 +642,8 @@ mod tests {
         }
         let goal = [1.0, 0.0, 0.0];
         let search = FieldSearch3 {
-            step: 0.05,
-            tolerance: 0.02,
-            max_steps: 100_000,
             max_checks: 5_000,
-            near_stall: 0,
+            ..settings(0.05, 100_000)
         };
         let calls = |near_stall: usize| {
             let filter = Barred(Default::default());
@@ -712,13 +690,7 @@ mod tests {
                 Ok(vec![true; c.len()])
             }
         }
-        let search = FieldSearch3 {
-            step: 0.1,
-            tolerance: 0.02,
-            max_steps: 40,
-            max_checks: 0,
-            near_stall: 0,
-        };
+        let search = settings(0.1, 40);
         let record = Record(Default::default());
         search
             .search(&Flat, &record, [0.0; 3], [5.0, 0.0, 0.0])
