@@ -618,7 +618,13 @@ impl<'a> PairSetup<'a> {
                     tolerance: 0.02,
                     max_steps,
                     max_checks: 2 * max_steps,
-                    near_stall: NEAR_STALL,
+                    // A sit-down wears the frame nearest its torso, not a gait's: its goal
+                    // does not stand only at a few phases.
+                    near_stall: if pair.kind == PairKind::Walk {
+                        NEAR_STALL
+                    } else {
+                        0
+                    },
                 }
             },
             sampling: SamplingConfig {
@@ -632,12 +638,12 @@ impl<'a> PairSetup<'a> {
     }
 }
 
-/// Pose checks at most without coming nearer the goal once ours' strict search is within two
-/// steps of it ([`FieldSearch3::near_stall`]), before ours falls back to the region alone: a
-/// goal a body fits only at a few frames and headings is come close to early, and the search
-/// would otherwise spend its whole budget on the rest of the room. Set above the longest such
-/// run of any strict search that went on to land (`docs/performance.md`), so it ends only
-/// searches that would have failed.
+/// Pose checks at most without coming nearer the goal once ours' strict search for a walk is
+/// within two steps of it ([`FieldSearch3::near_stall`]), before ours falls back to the region
+/// alone: a goal a body fits only at a few frames and headings is come close to early, and
+/// the search would otherwise spend its whole budget on the rest of the room. Set above the
+/// longest such run of any strict search that went on to land (`docs/performance.md`), so it
+/// ends only searches that would have failed.
 pub const NEAR_STALL: usize = 2500;
 
 /// How far past a pair's start ours' exact field is marched, metres
