@@ -352,7 +352,7 @@ fn main() -> Result<()> {
                 for r in &runs {
                     let o = &r.outcome;
                     let line = serde_json::json!({
-                        "room": seed, "pair": i, "kind": format!("{:?}", pair.kind),
+                        "room": seed, "pair": i, "kind": pair.kind.name(),
                         "planner": r.planner.name(), "seconds": o.seconds,
                         "goal_seconds": o.goal_seconds, "reached": o.reached,
                         "relaxed": o.relaxed, "valid": o.poses.valid,

@@ -40,18 +40,25 @@ fn scratch(name: &str) -> PathBuf {
 /// Runs `args` and asserts a clean refusal: exit status 1 (anyhow's error), no panic (101) or
 /// abort, and `expect` in the message.
 fn refuses(out: Output, expect: &str) {
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(1), "not a clean error:\n{stderr}");
-    assert!(stderr.contains(expect), "expected `{expect}` in:\n{stderr}");
-    assert!(!stderr.contains("panicked"), "{stderr}");
+    refuses_with(out, 1, expect);
 }
 
 /// Runs `args` and asserts clap's refusal of a bad flag: exit status 2 and `expect` in the
 /// message.
 fn refuses_usage(out: Output, expect: &str) {
+    refuses_with(out, 2, expect);
+}
+
+/// A refusal with exit status `code`, `expect` in the message and no panic.
+fn refuses_with(out: Output, code: i32, expect: &str) {
     let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "not a usage error:\n{stderr}");
+    assert_eq!(
+        out.status.code(),
+        Some(code),
+        "not a clean error:\n{stderr}"
+    );
     assert!(stderr.contains(expect), "expected `{expect}` in:\n{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
 }
 
 fn run(bin: &Path, args: &[&str]) -> Output {
