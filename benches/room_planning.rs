@@ -5,13 +5,13 @@
 //! - per room: the scene's distance grid and surface columns that ours' pose checks read, and the navigation
 //!   mesh's build (Recast's pipeline in Rust and Polyanya's import);
 //! - per goal: the exact field's fast marching over the region's voxels (and, for the ratio,
-//!   over its whole box), and the learned field's one batched pass over the region (pinned to
+//!   over its whole box; and as a walk marches it, to its start and 1 m past, over the ways at
+//!   most 1 m longer than the shortest), and the learned field's one batched pass over the region (pinned to
 //!   its goal, as `room_nav` makes it);
 //! - per walking path, four pairs taken in turn: ours on the learned field's table, ours on
-//!   the exact field with its fast marching (to the start and 1 m past it, as `room_nav`
-//!   marches it) inside each call (`ours_exact_with_goal`), the
-//!   paper's search alone (a network pass per step), ours without affordance, the navigation
-//!   mesh's query, PRM with its roadmap, RRT* at 500 / 5000 iterations and RRT;
+//!   the exact field with its fast marching (as `room_nav` marches it) inside each call
+//!   (`ours_exact_with_goal`), the paper's search alone (a network pass per step), ours
+//!   without affordance, the navigation mesh's query, PRM with its roadmap, RRT* at 500 / 5000 iterations and RRT;
 //! - per sit-down path (every seat of the room its region reaches): ours on the exact field
 //!   with its fast marching, ours on the learned field's table, PRM and RRT*;
 //! - per walking path on real-furniture room 10000 (Sweet Home 3D's models, when
@@ -217,6 +217,18 @@ fn bench_rooms(c: &mut Criterion) {
         b.iter(|| {
             i += 1;
             black_box(ExactField3::at_cell(&region, walks[i % walks.len()].goal).expect("field"))
+        })
+    });
+    // The march as a walk makes it: to the start and a metre past it, over the ways at most
+    // a metre longer than the shortest.
+    group.bench_function("goal/exact_fast_marching_toward_start", |b| {
+        let mut i = 0;
+        b.iter(|| {
+            i += 1;
+            let t = &walks[i % walks.len()];
+            black_box(
+                ExactField3::toward(&region, t.goal, t.pair.start, EXACT_BAND).expect("field"),
+            )
         })
     });
     // The same march over the region's whole box (the dense solve), for the ratio.

@@ -23,7 +23,9 @@ use clap::Parser;
 use envfield::affordance::{walk, WalkConfig};
 use envfield::nets::{FieldNet, ModelConfig};
 use envfield::plan::space3::SamplingConfig;
-use envfield::rooms::harness::{pairs, run_pair, PairKind, PlannerKind, RoomContext, RunSettings};
+use envfield::rooms::harness::{
+    pairs, run_pair, FieldKind, PairKind, PlannerKind, RoomContext, RunSettings,
+};
 use envfield::rooms::pictures::write_run_files;
 use envfield::rooms::tables::{finite_mean, Tally};
 use envfield::rooms::{
@@ -276,6 +278,12 @@ fn main() -> Result<()> {
             .collect(),
         None => PlannerKind::ALL.to_vec(),
     };
+    let needs_net = planners.iter().any(|p| {
+        matches!(
+            p.field(),
+            Some(FieldKind::Learned | FieldKind::LearnedTable)
+        )
+    });
     let mut walks_out = args
         .walks_out
         .as_ref()
@@ -314,8 +322,15 @@ fn main() -> Result<()> {
         let t = Instant::now();
         let region = sample_region(&vae, &scene, args.samples, seed)?;
         region_s.push(t.elapsed().as_secs_f64());
-        let (net, trained_s) = room_field(&args, k, seed, &region)?;
-        field_s.extend(trained_s);
+        // A learned field only for the planners that read one: `--planners ours_exact,prm`
+        // runs on a room no field was trained for, without training one.
+        let net = if needs_net {
+            let (net, trained_s) = room_field(&args, k, seed, &region)?;
+            field_s.extend(trained_s);
+            Some(net)
+        } else {
+            None
+        };
         let (tables, tables_s) = RoomContext::tables(&scene)?;
         let mesh = Navmesh::for_room(&scene, &walk(&WalkConfig::default(), seed)?, seed);
         let room_planners: Vec<PlannerKind> = planners
@@ -326,7 +341,7 @@ fn main() -> Result<()> {
         let room = RoomContext {
             scene: &scene,
             region: &region,
-            net: Some(&net),
+            net: net.as_ref(),
             tables: Some(&tables),
             tables_s,
             navmesh: mesh.as_ref().map(|m| (m as &dyn FloorPlanner, m.build_s)),

@@ -108,6 +108,17 @@ pub struct SolveOptions3<'a> {
     pub stop_at: Option<Cell3>,
     /// As [`SolveOptions2::past_stop`].
     pub past_stop: f32,
+    /// With `stop_at`: march only the cells on ways from the sources to it at most this much
+    /// longer than the shortest (in the solve's units), the rest left infinite, for a search
+    /// from `stop_at` that may go round what it meets. A cell is left out when its value plus
+    /// its straight line to `stop_at` exceeds the shortest way's length plus this; the
+    /// shortest is bounded from above as the march goes, by the first accepted cell found to
+    /// see `stop_at` along a straight line of free cells (until one does, every cell is
+    /// marched). The cells kept have the values of the whole march, but within a few cells
+    /// of the edge, where a neighbour left out is missing from a stencil. Where that bound
+    /// proves too short (`stop_at` left out, or within four cells of the edge), the solve
+    /// marches again without it. `None` marches every way. Unit speed only.
+    pub detour: Option<f32>,
 }
 
 pub(crate) fn check_band(past_stop: f32) -> Result<()> {
@@ -117,6 +128,32 @@ pub(crate) fn check_band(past_stop: f32) -> Result<()> {
         )));
     }
     Ok(())
+}
+
+/// Whether a march kept to the ways within `within` left its stop, of value `stop`, outside
+/// them or too near their edge, where a stencil may miss a cell left out (four cells of
+/// `spacing`; in `tests/properties.rs` values that far inside are the whole march's): the
+/// bound on the shortest way fell short of it, and the solve marches every way instead.
+pub(crate) fn short_of(stop: f32, within: f32, spacing: f32) -> bool {
+    within.is_finite() && (stop.is_nan() || stop > within - 4.0 * spacing)
+}
+
+/// The detour of [`SolveOptions3::detour`] (infinity without one), checked: >= 0, with a
+/// stop cell, at unit speed.
+pub(crate) fn check_detour(options: &SolveOptions3<'_>) -> Result<f32> {
+    let Some(detour) = options.detour else {
+        return Ok(f32::INFINITY);
+    };
+    let problem = if detour.is_nan() || detour < 0.0 {
+        format!("detour must be >= 0 (infinite marches every way), got {detour}")
+    } else if options.stop_at.is_none() {
+        "detour keeps to the ways to stop_at: it needs stop_at".into()
+    } else if options.speed.is_some() {
+        "detour is for unit speed: drop the speed map or the detour".into()
+    } else {
+        return Ok(detour);
+    };
+    Err(EikonalError::InvalidConfig(problem))
 }
 
 fn check_speeds(values: &[f32], cell_name: impl Fn(usize) -> String) -> Result<()> {
@@ -234,13 +271,14 @@ impl FastMarching {
             grid.check(stop)?;
         }
         check_band(options.past_stop)?;
-        let values = march(&Problem {
+        let (values, _) = march(&Problem {
             dims: [grid.rows(), grid.cols()],
             obstacles: grid.obstacles(),
             speed: options.speed.map(Field2::values),
             sources: &src,
             stop_at: options.stop_at.map(|c| [c.row, c.col]),
             past_stop: options.past_stop,
+            detour: f32::INFINITY,
             spacing: self.spacing as f64,
             second_order: self.order == Order::Second,
             source_radius: self.source_radius,
@@ -301,17 +339,25 @@ impl FastMarching {
             grid.check(stop)?;
         }
         check_band(options.past_stop)?;
-        let values = march(&Problem {
+        let mut problem = Problem {
             dims: grid.shape(),
             obstacles: grid.obstacles(),
             speed: options.speed.map(Field3::values),
             sources: &src,
             stop_at: options.stop_at.map(|c| [c.x, c.y, c.z]),
             past_stop: options.past_stop,
+            detour: check_detour(&options)?,
             spacing: self.spacing as f64,
             second_order: self.order == Order::Second,
             source_radius: self.source_radius,
-        });
+        };
+        let (mut values, within) = march(&problem);
+        if let Some(stop) = options.stop_at.and_then(|c| grid.index(c)) {
+            if short_of(values[stop], within, self.spacing) {
+                problem.detour = f32::INFINITY;
+                values = march(&problem).0;
+            }
+        }
         if options.speed.is_some() {
             self.check_finite(&values)?;
         }

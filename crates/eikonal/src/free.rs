@@ -198,21 +198,29 @@ impl FastMarching {
         crate::fmm::check_band(options.past_stop)?;
         let none = cells.len();
         let record = |c: [usize; 3]| cells.number(Cell3::new(c[0], c[1], c[2])).unwrap_or(none);
-        Ok(march_free(
-            &Problem {
-                dims: cells.shape,
-                obstacles: &[],
-                speed: None,
-                sources: &src,
-                stop_at: options.stop_at.map(|c| [c.x, c.y, c.z]),
-                past_stop: options.past_stop,
-                spacing: self.spacing as f64,
-                second_order: self.order == Order::Second,
-                source_radius: self.source_radius,
-            },
-            &cells.links,
-            record,
-        ))
+        let mut problem = Problem {
+            dims: cells.shape,
+            obstacles: &[],
+            speed: None,
+            sources: &src,
+            stop_at: options.stop_at.map(|c| [c.x, c.y, c.z]),
+            past_stop: options.past_stop,
+            detour: crate::fmm::check_detour(&options)?,
+            spacing: self.spacing as f64,
+            second_order: self.order == Order::Second,
+            source_radius: self.source_radius,
+        };
+        let cell_of = |k: usize| {
+            let c = cells.cell(k);
+            [c.x, c.y, c.z]
+        };
+        let (mut values, within) = march_free(&problem, &cells.links, record, cell_of);
+        let stop = options.stop_at.and_then(|c| cells.number(c));
+        if stop.is_some_and(|k| crate::fmm::short_of(values[k], within, self.spacing)) {
+            problem.detour = f32::INFINITY;
+            values = march_free(&problem, &cells.links, record, cell_of).0;
+        }
+        Ok(values)
     }
 }
 
@@ -259,6 +267,17 @@ mod tests {
                         past_stop: 0.25,
                         ..Default::default()
                     },
+                    SolveOptions3 {
+                        stop_at: Some(stop),
+                        past_stop: 0.25,
+                        detour: Some(0.2),
+                        ..Default::default()
+                    },
+                    SolveOptions3 {
+                        stop_at: Some(stop),
+                        detour: Some(0.0),
+                        ..Default::default()
+                    },
                 ] {
                     let dense = fmm.solve3_with(&grid, &[source], options).unwrap();
                     let free = fmm.solve3_free(&cells, &[source], options).unwrap();
@@ -277,6 +296,140 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// A slab (a floor two cells high) with a wall between the goal and the stop, so that the
+    /// goal does not see the stop and the march's bound comes from a cell past the wall's end.
+    fn walled_slab() -> (Grid3, Cell3, Cell3) {
+        let mut grid = Grid3::new(60, 40, 2).unwrap();
+        for y in 0..30 {
+            for z in 0..2 {
+                grid.set_obstacle(Cell3::new(30, y, z), true).unwrap();
+            }
+        }
+        (grid, Cell3::new(25, 25, 0), Cell3::new(50, 8, 1))
+    }
+
+    /// The ways at most `detour` longer than the shortest: where they pass, the values are
+    /// the whole march's; far off them nothing is marched; the stop's value is the whole
+    /// march's bit for bit.
+    #[test]
+    fn a_march_kept_to_short_ways_keeps_their_values_and_leaves_the_rest() {
+        let (grid, goal, stop) = walled_slab();
+        let cells = FreeCells3::new(&grid).unwrap();
+        let fmm = FastMarching {
+            spacing: 0.1,
+            ..FastMarching::with_order(Order::Second)
+        };
+        let whole = fmm
+            .solve3_free(&cells, &[goal], Default::default())
+            .unwrap();
+        let at = |values: &[f32], c: Cell3| values[cells.number(c).unwrap()];
+        let shortest = at(&whole, stop);
+        // Round the wall's end: longer than the straight line, so the goal cannot see it.
+        let line = 0.1 * ((25.0f32 * 25.0) + 17.0 * 17.0 + 1.0).sqrt();
+        assert!(shortest > line + 0.5, "{shortest} {line}");
+        let banded = SolveOptions3 {
+            stop_at: Some(stop),
+            past_stop: 1.0,
+            ..Default::default()
+        };
+        let band = fmm.solve3_free(&cells, &[goal], banded).unwrap();
+        let kept = SolveOptions3 {
+            detour: Some(1.0),
+            ..banded
+        };
+        let short = fmm.solve3_free(&cells, &[goal], kept).unwrap();
+        assert_eq!(at(&short, stop).to_bits(), shortest.to_bits());
+        let finite = |v: &[f32]| v.iter().filter(|x| x.is_finite()).count();
+        assert!(
+            3 * finite(&short) < 2 * finite(&band),
+            "{} of {} cells",
+            finite(&short),
+            finite(&band)
+        );
+        let (mut inner, mut outer) = (0, 0);
+        for k in 0..cells.len() {
+            let c = cells.cell(k);
+            let line = 0.1
+                * (((c.x.abs_diff(stop.x).pow(2)
+                    + c.y.abs_diff(stop.y).pow(2)
+                    + c.z.abs_diff(stop.z).pow(2)) as f32)
+                    .sqrt());
+            let way = whole[k] + line;
+            if way <= shortest + 0.7 {
+                // On a way 0.7 m longer at most, three cells inside the edge.
+                inner += 1;
+                assert!(
+                    (short[k] - whole[k]).abs() < 1e-3,
+                    "{c}: {} {}",
+                    short[k],
+                    whole[k]
+                );
+            } else if way > shortest + 1.5 && c.x > 35 {
+                // Past the wall, marched after the bound was found.
+                outer += 1;
+                assert!(short[k].is_infinite(), "{c}: {}", short[k]);
+            }
+        }
+        assert!(inner > 300 && outer > 300, "{inner} {outer}");
+        // The dense solve leaves out the same cells, bit for bit.
+        let dense = fmm.solve3_with(&grid, &[goal], kept).unwrap();
+        for k in 0..cells.len() {
+            assert_eq!(
+                dense.get(cells.cell(k)).unwrap().to_bits(),
+                short[k].to_bits()
+            );
+        }
+    }
+
+    /// A corridor one cell wide that climbs in steps: the straight line along it sees the stop,
+    /// but the 6-neighbour march goes along it at each step's length, longer than the line,
+    /// so the bound falls short of the stop and the solve marches again without it.
+    #[test]
+    fn a_bound_short_of_the_stop_marches_every_way_again() {
+        let n = 20;
+        let mut grid =
+            Grid3::from_obstacles([n + 1, n + 1, 1], vec![true; (n + 1) * (n + 1)]).unwrap();
+        for i in 0..n {
+            grid.set_obstacle(Cell3::new(i, i, 0), false).unwrap();
+            grid.set_obstacle(Cell3::new(i + 1, i, 0), false).unwrap();
+        }
+        grid.set_obstacle(Cell3::new(n, n, 0), false).unwrap();
+        let (goal, stop) = (Cell3::new(0, 0, 0), Cell3::new(n, n, 0));
+        let cells = FreeCells3::new(&grid).unwrap();
+        let fmm = FastMarching::default();
+        let plain = SolveOptions3 {
+            stop_at: Some(stop),
+            past_stop: 1.0,
+            ..Default::default()
+        };
+        let every = fmm.solve3_free(&cells, &[goal], plain).unwrap();
+        let stop_k = cells.number(stop).unwrap();
+        // Longer than the line plus the detour: a bound from the line alone misses it.
+        assert!(
+            every[stop_k] > (n as f32) * 2f32.sqrt() + 1.0,
+            "{}",
+            every[stop_k]
+        );
+        let kept = SolveOptions3 {
+            detour: Some(1.0),
+            ..plain
+        };
+        let again = fmm.solve3_free(&cells, &[goal], kept).unwrap();
+        assert_eq!(
+            again.iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+            every.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+        );
+        let dense = fmm.solve3_with(&grid, &[goal], kept).unwrap();
+        assert_eq!(dense.get(stop).unwrap().to_bits(), every[stop_k].to_bits());
+        // A stop no way reaches stays infinite, with or without the detour.
+        let mut apart = grid.clone();
+        apart.set_obstacle(Cell3::new(10, 10, 0), true).unwrap();
+        apart.set_obstacle(Cell3::new(11, 10, 0), true).unwrap();
+        let cells = FreeCells3::new(&apart).unwrap();
+        let cut = fmm.solve3_free(&cells, &[goal], kept).unwrap();
+        assert!(cut[cells.number(stop).unwrap()].is_infinite());
     }
 
     #[test]
@@ -306,6 +459,34 @@ mod tests {
         assert!(
             e(fmm.solve3_free(&cells, &[Cell3::new(0, 0, 0)], with_speed)).contains("solve3_with")
         );
+        let from = [Cell3::new(0, 0, 0)];
+        let stop = Some(Cell3::new(3, 3, 1));
+        for (detour, stop_at, expect) in [
+            (f32::NAN, stop, "detour must be >= 0"),
+            (-0.5, stop, "detour must be >= 0"),
+            (1.0, None, "needs stop_at"),
+        ] {
+            let options = SolveOptions3 {
+                stop_at,
+                detour: Some(detour),
+                ..Default::default()
+            };
+            assert!(
+                e(fmm.solve3_free(&cells, &from, options)).contains(expect),
+                "{expect}"
+            );
+            let dense = fmm.solve3_with(&grid, &from, options);
+            assert!(matches!(dense, Err(EikonalError::InvalidConfig(m)) if m.contains(expect)));
+        }
+        let speed = envfield_grid::Field3::new([4, 4, 2], vec![1.0; 32]).unwrap();
+        let both = SolveOptions3 {
+            speed: Some(&speed),
+            stop_at: stop,
+            detour: Some(1.0),
+            ..Default::default()
+        };
+        let dense = fmm.solve3_with(&grid, &from, both).unwrap_err().to_string();
+        assert!(dense.contains("detour is for unit speed"), "{dense}");
         let walls = Grid3::from_obstacles([2, 2, 1], vec![true; 4]).unwrap();
         assert!(FreeCells3::new(&walls).is_err());
     }

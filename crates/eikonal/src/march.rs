@@ -18,6 +18,9 @@ pub(crate) struct Problem<'a, const N: usize> {
     pub stop_at: Option<[usize; N]>,
     /// How far above `stop_at`'s value the march goes on (0: it stops there).
     pub past_stop: f32,
+    /// With `stop_at`: how much longer than the shortest a way to it may be and still be
+    /// marched (infinity: every way). See [`Marcher::run`].
+    pub detour: f32,
     pub spacing: f64,
     pub second_order: bool,
     /// Cells within this many cells (per axis) of a source, with a clear line of sight, get the
@@ -405,9 +408,10 @@ pub(crate) fn check_size<const N: usize>(dims: [usize; N], shape: &str) -> crate
     }
 }
 
-/// Runs fast marching and returns the C-order values (f32; infinity where not reached). The
-/// caller has checked the grid's size with [`check_size`].
-pub(crate) fn march<const N: usize>(p: &Problem<'_, N>) -> Vec<f32> {
+/// Runs fast marching and returns the C-order values (f32; infinity where not reached) and
+/// the bound the march kept to ([`Marcher::run`]). The caller has checked the grid's size
+/// with [`check_size`].
+pub(crate) fn march<const N: usize>(p: &Problem<'_, N>) -> (Vec<f32>, f32) {
     let lat = Lattice::new(p.dims).expect("the solver checks the grid's size first");
     if lat.len >= LARGE_GRID {
         march_with::<N, 4>(p, lat)
@@ -426,7 +430,10 @@ thread_local! {
 /// The most records [`SPARE`] keeps between solves (8 MB).
 const SPARE_MAX: usize = 1 << 20;
 
-fn march_with<const N: usize, const ARITY: usize>(p: &Problem<'_, N>, lat: Lattice<N>) -> Vec<f32> {
+fn march_with<const N: usize, const ARITY: usize>(
+    p: &Problem<'_, N>,
+    lat: Lattice<N>,
+) -> (Vec<f32>, f32) {
     let mut recs = SPARE.take();
     recs.clear();
     recs.resize(
@@ -464,7 +471,9 @@ fn march_with<const N: usize, const ARITY: usize>(p: &Problem<'_, N>, lat: Latti
         prefetch: (lat.len >= LARGE_GRID).then_some(lat.strides),
         heap: IndexedHeap::new(),
     };
-    m.run(p, |cell| lat.padded(cell));
+    let cell_of =
+        |i: usize| std::array::from_fn(|k| (i / lat.strides[k]) % (lat.dims[k] + 2 * PAD) - PAD);
+    let within = m.run(p, |cell| lat.padded(cell), cell_of);
 
     // Rows come in C order, so the output is written once, front to back.
     let mut out = Vec::with_capacity(p.obstacles.len());
@@ -475,20 +484,21 @@ fn march_with<const N: usize, const ARITY: usize>(p: &Problem<'_, N>, lat: Latti
     if m.recs.len() <= SPARE_MAX {
         SPARE.set(m.recs);
     }
-    out
+    (out, within)
 }
 
 /// Runs fast marching over the free cells of a 3D grid alone and returns their values in
 /// `links`' order (infinity where not reached). `links` holds each free cell's six neighbours
 /// (below and above along x, y, z) as record numbers, the last entry a blocked cell that is
 /// its own neighbour everywhere; `record` maps a cell of the grid to its record (the blocked
-/// one for an obstacle). The same arithmetic as [`march`] in the same order, so the values
-/// are [`march`]'s bit for bit.
+/// one for an obstacle), `cell_of` a record to its cell. The same arithmetic as [`march`] in
+/// the same order, so the values (and the bound) are [`march`]'s bit for bit.
 pub(crate) fn march_free(
     p: &Problem<'_, 3>,
     links: &[[u32; 6]],
     record: impl Fn([usize; 3]) -> usize,
-) -> Vec<f32> {
+    cell_of: impl Fn(usize) -> [usize; 3],
+) -> (Vec<f32>, f32) {
     debug_assert!(p.speed.is_none(), "the free cells' march is for unit speed");
     let n = links.len();
     let mut recs = SPARE.take();
@@ -512,19 +522,35 @@ pub(crate) fn march_free(
         prefetch: None,
         heap: IndexedHeap::new(),
     };
-    m.run(p, record);
+    let within = m.run(p, record, cell_of);
     let out = m.recs[..n - 1].iter().map(|r| r.known).collect();
     if m.recs.len() <= SPARE_MAX {
         SPARE.set(m.recs);
     }
-    out
+    (out, within)
 }
 
 impl<const N: usize, const ARITY: usize, L: Links<N>> Marcher<N, ARITY, L> {
     /// Initialises the records around `p`'s sources and marches until the heap is empty, the
     /// stop cell is accepted or its band is passed. `record` maps a cell of the grid to its
-    /// record.
-    fn run(&mut self, p: &Problem<'_, N>, record: impl Fn([usize; N]) -> usize) {
+    /// record, `cell_of` a real cell's record back to its cell.
+    ///
+    /// With a stop cell and a finite `p.detour`, the march keeps to the ways to the stop at
+    /// most that much longer than the shortest (the causal domain restriction of Clawson,
+    /// Cartee and Vladimirsky, 2014): a cell whose value plus its straight-line distance to
+    /// the stop exceeds a bound on the shortest way plus the detour is left out. Along the
+    /// characteristic from any cell back to the sources that sum never grows, so every cell a
+    /// kept cell's value depends on is kept too, but at the edge, where the grid's stencil
+    /// strays from the characteristic. The bound is the first accepted cell (every
+    /// [`SIGHT_EVERY`]th, the sources first) that sees the stop in a straight line through
+    /// free cells: its value plus that line. Until one does, every cell is marched. Returns
+    /// the bound plus the detour that the cells kept (infinity: no cell was left out).
+    fn run(
+        &mut self,
+        p: &Problem<'_, N>,
+        record: impl Fn([usize; N]) -> usize,
+        cell_of: impl Fn(usize) -> [usize; N],
+    ) -> f32 {
         // Exact initialisation around each source.
         let r = p.source_radius as isize;
         let mut frozen = Vec::new();
@@ -561,6 +587,23 @@ impl<const N: usize, const ARITY: usize, L: Links<N>> Marcher<N, ARITY, L> {
         }
         let stop = p.stop_at.map(&record);
         let band = p.past_stop > 0.0;
+        // The restriction's bound: a cell is kept while its value plus its straight line to
+        // the stop is at most this. Infinite until a cell that sees the stop is accepted.
+        let mut within = f32::INFINITY;
+        let mut sighting = match p.stop_at {
+            Some(target) if p.detour.is_finite() => Some(target),
+            _ => None,
+        };
+        if let Some(target) = sighting {
+            for &i in &self.frozen_in_order(&frozen) {
+                let c = cell_of(i);
+                if self.sees(&record, c, target) {
+                    within = self.recs[i].known + straight(c, target, p.spacing) + p.detour;
+                    sighting = None;
+                    break;
+                }
+            }
+        }
         // A stop cell among the sources is known already: the march ends there, or its band
         // counts from its value.
         let stop_known = stop.filter(|&s| self.recs[s].tag == KNOWN);
@@ -569,16 +612,36 @@ impl<const N: usize, const ARITY: usize, L: Links<N>> Marcher<N, ARITY, L> {
             for &i in &frozen {
                 self.update_neighbours(i);
             }
+            let mut accepted = 0usize;
             while let Some(entry) = self.heap.pop(&mut self.recs) {
                 let (value, i) = unpack(entry);
                 if value > limit {
                     break;
                 }
                 let i = i as usize;
+                if within.is_finite() {
+                    let target = p.stop_at.expect("a bound comes with a stop");
+                    if value + straight(cell_of(i), target, p.spacing) > within {
+                        // On no way to the stop short enough: never accepted, never queued
+                        // again.
+                        self.recs[i].tag = BLOCKED;
+                        continue;
+                    }
+                }
                 self.recs[i] = Rec {
                     known: value,
                     tag: KNOWN,
                 };
+                if let Some(target) = sighting {
+                    accepted += 1;
+                    if accepted % SIGHT_EVERY == 0 {
+                        let c = cell_of(i);
+                        if self.sees(&record, c, target) {
+                            within = value + straight(c, target, p.spacing) + p.detour;
+                            sighting = None;
+                        }
+                    }
+                }
                 if Some(i) == stop {
                     if !band {
                         break;
@@ -593,7 +656,70 @@ impl<const N: usize, const ARITY: usize, L: Links<N>> Marcher<N, ARITY, L> {
                 self.update_neighbours(i);
             }
         }
+        within
     }
+
+    /// The frozen cells in increasing value (the source first), each once.
+    fn frozen_in_order(&self, frozen: &[usize]) -> Vec<usize> {
+        let mut cells = frozen.to_vec();
+        cells.sort_by(|&a, &b| self.recs[a].known.total_cmp(&self.recs[b].known));
+        cells.dedup();
+        cells
+    }
+
+    /// Whether the straight line between the centres of cells `from` and `to` passes through
+    /// enterable cells alone (a 3D-DDA walk of the cells it crosses, one axis at a time, so
+    /// that every cell it visits shares a face with the last).
+    fn sees(
+        &self,
+        record: &impl Fn([usize; N]) -> usize,
+        from: [usize; N],
+        to: [usize; N],
+    ) -> bool {
+        let mut at = from;
+        let mut step = [0isize; N];
+        // The parameter (0 at `from`, 1 at `to`) at which the line next crosses a face on
+        // each axis, and how far apart those crossings are.
+        let mut next = [f64::INFINITY; N];
+        let mut delta = [f64::INFINITY; N];
+        for k in 0..N {
+            let d = to[k] as f64 - from[k] as f64;
+            if d != 0.0 {
+                step[k] = if d > 0.0 { 1 } else { -1 };
+                delta[k] = 1.0 / d.abs();
+                next[k] = 0.5 * delta[k];
+            }
+        }
+        let steps: usize = (0..N).map(|k| from[k].abs_diff(to[k])).sum();
+        for _ in 0..steps {
+            if self.recs[record(at)].tag == BLOCKED {
+                return false;
+            }
+            let mut k = 0;
+            for j in 1..N {
+                if next[j] < next[k] {
+                    k = j;
+                }
+            }
+            at[k] = (at[k] as isize + step[k]) as usize;
+            next[k] += delta[k];
+        }
+        // Each axis is stepped exactly as often as its cells differ, so this is `to`.
+        debug_assert_eq!(at, to);
+        self.recs[record(at)].tag != BLOCKED
+    }
+}
+
+/// How often (in accepted cells) a march that keeps to short ways looks for a cell that sees
+/// its stop, until one does: a look walks the line's cells, about as many as a few
+/// acceptances cost.
+const SIGHT_EVERY: usize = 16;
+
+/// The straight-line distance between cells `at` and `stop`, in the solve's units.
+#[inline]
+fn straight<const N: usize>(at: [usize; N], stop: [usize; N], spacing: f64) -> f32 {
+    let d2: usize = (0..N).map(|k| at[k].abs_diff(stop[k]).pow(2)).sum();
+    ((d2 as f64).sqrt() * spacing) as f32
 }
 
 /// Whether every cell of the box between `src` and `src + off` is enterable.

@@ -69,10 +69,12 @@ impl VoxelField3 {
         Self::march(region, goal, SolveOptions3::default())
     }
 
-    /// The field for the goal voxel `goal` marched only as far as one path from `start`
-    /// needs: until the start's voxel and `band` metres beyond its value, infinite further
-    /// out. A descent from the start never climbs above its own value; the band leaves room
-    /// for a search to go round what the poses refuse.
+    /// The field for the goal voxel `goal` marched only where one path from `start` may go:
+    /// over the voxels on ways from the start to the goal at most `band` metres longer than
+    /// the shortest, and no more than `band` above the start's value
+    /// ([`SolveOptions3::detour`], [`SolveOptions3::past_stop`]), infinite elsewhere. A
+    /// descent from the start never climbs above its own value; the band leaves room for a
+    /// search to go round what the poses refuse.
     ///
     /// # Errors
     /// As [`ExactField3::new`]; [`RoomsError::InvalidInput`] for a start outside the region
@@ -92,6 +94,7 @@ impl VoxelField3 {
         let options = SolveOptions3 {
             stop_at: Some(stop),
             past_stop: band,
+            detour: Some(band),
             ..Default::default()
         };
         Self::march(region, goal, options)
@@ -121,7 +124,7 @@ impl VoxelField3 {
     }
 
     /// The value at voxel `cell`'s centre, metres: infinite outside the region (or, for a
-    /// field marched [`VoxelField3::toward`] a start, beyond its band).
+    /// field marched [`VoxelField3::toward`] a start, off the ways it keeps to).
     pub fn at(&self, cell: Cell3) -> f32 {
         self.cells
             .number(cell)

@@ -646,9 +646,9 @@ impl<'a> PairSetup<'a> {
 /// ends only searches that would have failed.
 pub const NEAR_STALL: usize = 2500;
 
-/// How far past a pair's start ours' exact field is marched, metres
-/// ([`ExactField3::toward`]): room for the search to go round what the poses refuse, at a
-/// fraction of the whole region's march.
+/// How far past a pair's start, and how much longer than the shortest way, ours' exact field
+/// is marched, metres ([`ExactField3::toward`]): room for the search to go round what the
+/// poses refuse, at a fraction of the whole region's march.
 pub const EXACT_BAND: f32 = 1.0;
 
 /// How far from its goal ours' learned table is pinned to it, metres

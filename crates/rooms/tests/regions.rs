@@ -105,15 +105,28 @@ fn the_exact_field_of_an_open_box_is_the_distance() {
     assert!(ExactField3::new(&region, [10.0, 0.0, 0.0]).is_err());
     assert!(field.value([f32::NAN, 0.0, 0.0]).is_err());
 
-    // Marched toward one start and a band of 0.5 m past it: the same values out to the
-    // start's and the band, nothing beyond.
+    // Marched toward one start 2 m from the goal, a band of 0.5 m: the same values on the
+    // ways from the start at most 0.5 m longer than the straight one, nothing off them
+    // (past the start by 0.35 m, behind the goal, far off).
     let start = region.frame.center(Cell3::new(25, 5, 2));
     let near = ExactField3::toward(&region, Cell3::new(5, 5, 2), start.into(), 0.5).unwrap();
-    for p in [[2.5, 0.55, 0.25], [1.0, 0.55, 0.25], [2.9, 0.55, 0.25]] {
+    for p in [
+        [2.5, 0.55, 0.25],
+        [1.0, 0.55, 0.25],
+        [2.6, 0.75, 0.25],
+        [1.5, 0.9, 0.35],
+    ] {
         assert_eq!(near.value(p).unwrap(), field.value(p).unwrap(), "{p:?}");
     }
-    assert!(near.value([3.8, 0.55, 0.25]).unwrap().is_infinite());
-    assert!(field.value([3.8, 0.55, 0.25]).unwrap().is_finite());
+    for p in [
+        [2.9, 0.55, 0.25],
+        [0.15, 0.55, 0.25],
+        [3.8, 0.55, 0.25],
+        [1.5, 2.5, 0.25],
+    ] {
+        assert!(near.value(p).unwrap().is_infinite(), "{p:?}");
+        assert!(field.value(p).unwrap().is_finite(), "{p:?}");
+    }
     for band in [f32::NAN, -0.1] {
         assert!(ExactField3::toward(&region, Cell3::new(5, 5, 2), start.into(), band).is_err());
     }
