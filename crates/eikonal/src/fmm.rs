@@ -130,12 +130,26 @@ pub(crate) fn check_band(past_stop: f32) -> Result<()> {
     Ok(())
 }
 
-/// Whether a march kept to the ways within `within` left its stop, of value `stop`, outside
-/// them or too near their edge, where a stencil may miss a cell left out (four cells of
-/// `spacing`; in `tests/properties.rs` values that far inside are the whole march's): the
-/// bound on the shortest way fell short of it, and the solve marches every way instead.
-pub(crate) fn short_of(stop: f32, within: f32, spacing: f32) -> bool {
-    within.is_finite() && (stop.is_nan() || stop > within - 4.0 * spacing)
+/// Runs `march` on `problem`; where it kept to short ways and its bound fell short of the stop
+/// (record `stop` of the values: left out, or within four cells of `spacing` of the kept
+/// ways' edge, where a stencil may miss a cell left out; in `tests/properties.rs` values that
+/// far inside are the whole march's), runs it again over every way.
+pub(crate) fn march_kept<const N: usize>(
+    problem: Problem<'_, N>,
+    stop: Option<usize>,
+    spacing: f32,
+    march: impl Fn(&Problem<'_, N>) -> (Vec<f32>, f32),
+) -> Vec<f32> {
+    let (values, within) = march(&problem);
+    let short = |s: usize| values[s].is_nan() || values[s] > within - 4.0 * spacing;
+    if within.is_finite() && stop.is_some_and(short) {
+        return march(&Problem {
+            detour: f32::INFINITY,
+            ..problem
+        })
+        .0;
+    }
+    values
 }
 
 /// The detour of [`SolveOptions3::detour`] (infinity without one), checked: >= 0, with a
@@ -339,7 +353,7 @@ impl FastMarching {
             grid.check(stop)?;
         }
         check_band(options.past_stop)?;
-        let mut problem = Problem {
+        let problem = Problem {
             dims: grid.shape(),
             obstacles: grid.obstacles(),
             speed: options.speed.map(Field3::values),
@@ -351,13 +365,8 @@ impl FastMarching {
             second_order: self.order == Order::Second,
             source_radius: self.source_radius,
         };
-        let (mut values, within) = march(&problem);
-        if let Some(stop) = options.stop_at.and_then(|c| grid.index(c)) {
-            if short_of(values[stop], within, self.spacing) {
-                problem.detour = f32::INFINITY;
-                values = march(&problem).0;
-            }
-        }
+        let stop = options.stop_at.and_then(|c| grid.index(c));
+        let values = march_kept(problem, stop, self.spacing, march);
         if options.speed.is_some() {
             self.check_finite(&values)?;
         }

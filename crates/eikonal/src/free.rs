@@ -198,7 +198,7 @@ impl FastMarching {
         crate::fmm::check_band(options.past_stop)?;
         let none = cells.len();
         let record = |c: [usize; 3]| cells.number(Cell3::new(c[0], c[1], c[2])).unwrap_or(none);
-        let mut problem = Problem {
+        let problem = Problem {
             dims: cells.shape,
             obstacles: &[],
             speed: None,
@@ -214,13 +214,10 @@ impl FastMarching {
             let c = cells.cell(k);
             [c.x, c.y, c.z]
         };
-        let (mut values, within) = march_free(&problem, &cells.links, record, cell_of);
         let stop = options.stop_at.and_then(|c| cells.number(c));
-        if stop.is_some_and(|k| crate::fmm::short_of(values[k], within, self.spacing)) {
-            problem.detour = f32::INFINITY;
-            values = march_free(&problem, &cells.links, record, cell_of).0;
-        }
-        Ok(values)
+        Ok(crate::fmm::march_kept(problem, stop, self.spacing, |p| {
+            march_free(p, &cells.links, record, cell_of)
+        }))
     }
 }
 

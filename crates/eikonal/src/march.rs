@@ -55,6 +55,11 @@ impl<const N: usize> Lattice<N> {
         (0..N).map(|k| (cell[k] + PAD) * self.strides[k]).sum()
     }
 
+    /// The cell of padded index `i` (the inverse of [`Lattice::padded`] on the grid's cells).
+    fn cell(&self, i: usize) -> [usize; N] {
+        std::array::from_fn(|k| (i / self.strides[k]) % (self.dims[k] + 2 * PAD) - PAD)
+    }
+
     /// Calls `f(original_index, padded_index)` for every cell in C order.
     fn for_each(&self, mut f: impl FnMut(usize, usize)) {
         self.for_each_row(|o, i, n| {
@@ -471,9 +476,7 @@ fn march_with<const N: usize, const ARITY: usize>(
         prefetch: (lat.len >= LARGE_GRID).then_some(lat.strides),
         heap: IndexedHeap::new(),
     };
-    let cell_of =
-        |i: usize| std::array::from_fn(|k| (i / lat.strides[k]) % (lat.dims[k] + 2 * PAD) - PAD);
-    let within = m.run(p, |cell| lat.padded(cell), cell_of);
+    let within = m.run(p, |cell| lat.padded(cell), |i| lat.cell(i));
 
     // Rows come in C order, so the output is written once, front to back.
     let mut out = Vec::with_capacity(p.obstacles.len());
