@@ -23,27 +23,23 @@
 // criterion's macros generate undocumented public functions.
 #![allow(missing_docs)]
 
-#[path = "../examples/shared/navmesh.rs"]
-mod navmesh;
-
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-use envfield::affordance::{walk, WalkConfig};
 use envfield::eikonal::{FastMarching, Order};
 use envfield::grid::{Cell3, ContinuousField3};
 use envfield::nets::FieldNet;
-use envfield::plan::space3::SamplingConfig;
 use envfield::rooms::harness::{
-    learned_table, pairs, standing_places, FloorPlanner, Pair, PairKind, PairSetup, PlannerKind,
-    RoomContext, EXACT_BAND,
+    learned_table, pairs, FloorPlanner, Pair, PairOptions, PairSetup, PlannerKind,
+    RoomContext, RunSettings, EXACT_BAND,
 };
+use envfield::rooms::nav::{BENEATH_CELL, DISTANCE_CELL};
 use envfield::rooms::{
     sample_region, train_field3, AccessibleRegion, ExactField3, Field3Config, LearnedField3,
-    SceneTables, VoxelField3, BENEATH_CELL, DISTANCE_CELL,
+    SceneTables, VoxelField3,
 };
 use envfield::scene::{catalogue_room, generate_room, Catalogue, Room, RoomConfig};
 use envfield::scene::{DistanceGrid, SurfaceColumns};
 use envfield::vae::Cvae;
-use navmesh::{Navmesh, NavmeshConfig};
+use envfield_examples::{Navmesh, NavmeshConfig};
 use std::hint::black_box;
 use std::path::Path;
 
@@ -57,45 +53,39 @@ struct Timed {
     shortest: f64,
 }
 
-/// Four walking pairs at least 2 m apart along the exact field.
+/// Four walking pairs at least 2 m apart along the exact field, drawn as `room_nav` draws
+/// its pairs.
 fn walking_pairs(room: &Room, region: &AccessibleRegion, seed: u64) -> Vec<Timed> {
-    let standing = standing_places(&room.scene, region);
-    let gait = walk(&WalkConfig::default(), seed).expect("gait");
-    let mut out = Vec::new();
-    let mut k = 0;
-    while out.len() < 4 && k < standing.len() * standing.len() {
-        let (a, b) = (
-            standing[k % standing.len()],
-            standing[(k * 7919 + 13) % standing.len()],
-        );
-        k += 1;
-        let exact = ExactField3::new(region, b).expect("field");
-        let d = exact.value(a).expect("value");
-        if d.is_finite() && d > 2.0 {
-            let pair = Pair {
-                start: a,
-                goal: b,
-                sequence: gait.clone(),
-                repeat: true,
-                kind: PairKind::Walk,
-            };
-            let goal = region.cell(b, "goal").expect("goal");
-            out.push(Timed {
-                pair,
-                goal,
-                shortest: d as f64,
-            });
-        }
-    }
-    out
+    let options = PairOptions {
+        walks: 4,
+        min_distance: 2.0,
+        sit_downs: false,
+        seed,
+        ..PairOptions::default()
+    };
+    timed(
+        pairs(Some(room), &room.scene, region, &options).expect("pairs"),
+        region,
+    )
 }
 
 /// The sit-down pairs of the room's seats in `region`.
 fn sitting_pairs(room: &Room, region: &AccessibleRegion, seed: u64) -> Vec<Timed> {
-    pairs(Some(room), &room.scene, region, 0, seed)
-        .expect("pairs")
+    let options = PairOptions {
+        walks: 0,
+        seed,
+        ..PairOptions::default()
+    };
+    timed(
+        pairs(Some(room), &room.scene, region, &options).expect("pairs"),
+        region,
+    )
+}
+
+/// Each pair with its goal's voxel and its shortest distance, where the exact field finds one.
+fn timed(pairs: Vec<Pair>, region: &AccessibleRegion) -> Vec<Timed> {
+    pairs
         .into_iter()
-        .filter(|p| p.kind == PairKind::Sit)
         .filter_map(|pair| {
             let goal = region.cell(pair.goal, "goal").ok()?;
             let d = ExactField3::at_cell(region, goal)
@@ -141,15 +131,18 @@ impl Shared<'_> {
         field: Option<&dyn ContinuousField3>,
         budget: f64,
     ) -> bool {
+        let settings = RunSettings {
+            budget,
+            sit_budget: budget,
+            ..RunSettings::default()
+        };
         let mut setup = PairSetup::new(
             &self.room.scene,
             self.region,
             Some(self.tables),
             &t.pair,
             t.shortest,
-            budget,
-            5000,
-            SamplingConfig::default().seed,
+            &settings,
         );
         setup.navmesh = Some(self.navmesh);
         let path = planner

@@ -17,11 +17,15 @@
 
 use anyhow::{bail, Context, Result};
 use clap::Parser;
+use envfield::affordance::afford_all;
 use envfield::rooms::pictures::write_field_view;
+use envfield::rooms::quality::{
+    judge_region, region_quality, summarise_drawn, uniform_in_room, RegionQuality,
+};
+use envfield::rooms::sampling::{check_sample_density, middle_goal};
 use envfield::rooms::{
-    afford_all, check_sample_density, draw_torsos, judge_region, middle_goal, region_quality,
-    summarise_drawn, train_field3, uniform_in_room, AccessibleRegion, ExactField3, Field3Config,
-    Field3Report, LearnedField3, RegionConfig, RegionQuality,
+    draw_torsos, train_field3, AccessibleRegion, ExactField3, Field3Config, Field3Report,
+    LearnedField3, RegionConfig,
 };
 use envfield::scene::{
     catalogue_room, generate_room, read_scene, Catalogue, ImportConfig, Room, RoomConfig, Scene,
@@ -143,10 +147,10 @@ impl Rooms {
 
 fn region_config(args: &Args) -> RegionConfig {
     let mut config = RegionConfig::default();
-    config.torso_radius = args.torso_radius.unwrap_or(config.torso_radius);
-    config.settle = args.settle.unwrap_or(config.settle);
+    config.filter.torso_radius = args.torso_radius.unwrap_or(config.filter.torso_radius);
+    config.filter.settle = args.settle.unwrap_or(config.filter.settle);
     if args.no_plausible {
-        (config.plausible, config.settle) = (false, 0.0);
+        (config.filter.plausible, config.filter.settle) = (false, 0.0);
     }
     config
 }
@@ -212,7 +216,7 @@ fn one(args: &Args, vae: &Cvae) -> Result<()> {
     let config = region_config(args);
     let t = Instant::now();
     // The filter once: the region, its quality and the summary all read its answers.
-    let affords = afford_all(&scene, &samples, &config)?;
+    let affords = afford_all(&scene, &samples, &config.filter)?;
     let kept = affords.iter().filter(|a| a.kept()).map(|a| a.at).collect();
     let region = AccessibleRegion::from_kept(&scene, kept, &config)?;
     let region_ms = t.elapsed().as_secs_f64() * 1e3;
@@ -276,7 +280,7 @@ fn many(args: &Args, vae: &Cvae, rooms: u64) -> Result<()> {
         let room = makes.room(seed)?;
         let samples = draw(args, vae, anchors.as_ref(), &room.scene, seed, false)?;
         // The filter once for ours: its quality and its field read the same region.
-        let affords = afford_all(&room.scene, &samples, &config)?;
+        let affords = afford_all(&room.scene, &samples, &config.filter)?;
         let kept: Vec<[f32; 3]> = affords.iter().filter(|a| a.kept()).map(|a| a.at).collect();
         let region = (!kept.is_empty())
             .then(|| AccessibleRegion::from_kept(&room.scene, kept, &config))

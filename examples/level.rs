@@ -21,12 +21,12 @@
 //! `--out`; the last line is JSON.
 use anyhow::{bail, Context, Result};
 use clap::Parser;
-use envfield::affordance::{walk, Support, WalkConfig};
-use envfield::grid::{ContinuousField3, SplitMix64};
-use envfield::rooms::harness::{run_pair, Pair, PairKind, PlannerKind, RoomContext, RunSettings};
+use envfield::rooms::harness::{
+    pairs, run_pair, PairOptions, PlannerKind, RoomContext, RunSettings,
+};
 use envfield::rooms::pictures::height_view;
 use envfield::rooms::tables::{finite_mean, Tally};
-use envfield::rooms::{afford, standing_torsos, AccessibleRegion, ExactField3, RegionConfig};
+use envfield::rooms::{standing_torsos, AccessibleRegion, RegionConfig};
 use envfield::scene::{read_scene, ImportConfig, Units, UpAxis};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -159,41 +159,15 @@ fn main() -> Result<()> {
     region.write_ply(args.out.join("region.ply"))?;
 
     // Pairs: goals at standing places, starts at least --rise above or below them.
-    let gait = walk(&WalkConfig::default(), args.seed)?;
-    let stands = |p: [f32; 3]| {
-        afford(&scene, p, &RegionConfig::default())
-            .is_ok_and(|a| a.valid == Some(Support::Standing))
+    let options = PairOptions {
+        walks: args.pairs,
+        min_distance: 0.0,
+        goals: Some(args.goals),
+        rise: args.rise,
+        sit_downs: false,
+        seed: args.seed,
     };
-    let mut rng = SplitMix64::new(args.seed ^ 0x1E7E1);
-    let mut pairs = Vec::new();
-    let per_goal = args.pairs.div_ceil(args.goals);
-    let mut tries = 0;
-    while pairs.len() < args.pairs && tries < 100 * args.goals {
-        tries += 1;
-        let goal = standing[rng.below(standing.len())];
-        if !stands(goal) {
-            continue;
-        }
-        let field = ExactField3::new(&region, goal)?;
-        let mut found = 0;
-        for _ in 0..200 * per_goal {
-            if found == per_goal || pairs.len() == args.pairs {
-                break;
-            }
-            let start = standing[rng.below(standing.len())];
-            let d = field.value(start)?;
-            if (start[2] - goal[2]).abs() >= args.rise && d.is_finite() && stands(start) {
-                pairs.push(Pair {
-                    start,
-                    goal,
-                    sequence: gait.clone(),
-                    repeat: true,
-                    kind: PairKind::Walk,
-                });
-                found += 1;
-            }
-        }
-    }
+    let pairs = pairs(None, &scene, &region, &options)?;
     if pairs.is_empty() {
         bail!(
             "no two standing places of the region differ by --rise {} m in height: the level \
@@ -219,6 +193,7 @@ fn main() -> Result<()> {
             big_budget: 0,
             sampler_budget: args.sampler_budget,
             seed: args.seed + i as u64,
+            ..RunSettings::default()
         };
         let runs = run_pair(&room, pair, &PLANNERS, &settings)?;
         for r in &runs {

@@ -89,7 +89,7 @@ fn main() -> Result<()> {
     mesh.write(args.out.join("scene.obj"))?;
     mesh.write(args.out.join("scene.ply"))?;
     let points = sample_surface(&scene, args.points, args.seed)?;
-    write_point_cloud(&points, args.out.join("points.ply"))?;
+    write_point_cloud(&points, None, args.out.join("points.ply"))?;
 
     let t = Instant::now();
     let map = floor_map(

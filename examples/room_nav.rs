@@ -21,29 +21,21 @@
 use anyhow::{bail, Context, Result};
 use clap::Parser;
 use envfield::affordance::{walk, WalkConfig};
-use envfield::nets::{FieldNet, ModelConfig};
-use envfield::plan::space3::SamplingConfig;
+use envfield::nets::FieldNet;
+use envfield::rooms::field3_store::{save_tagged, FieldOrigin, Obtained};
 use envfield::rooms::harness::{
-    pairs, run_pair, FieldKind, PairKind, PlannerKind, RoomContext, RunSettings,
+    pairs, run_pair, FloorPlanner, PairOptions, PlannerKind, RoomContext, RunSettings,
 };
 use envfield::rooms::pictures::write_run_files;
-use envfield::rooms::tables::{finite_mean, Tally};
-use envfield::rooms::{
-    check_sample_density, region_key, sample_region, train_field3, AccessibleRegion, Field3Config,
-};
-use envfield::scene::{
-    catalogue_room, generate_room, read_scene, Catalogue, ImportConfig, RoomConfig, Units, UpAxis,
-};
+use envfield::rooms::tables::{finite_mean, mean_bytes, Tally};
+use envfield::rooms::{sample_region, AccessibleRegion, Field3Config, FieldStore};
+use envfield::scene::RoomConfig;
 use envfield::vae::Cvae;
+use envfield_examples::{Navmesh, SceneArgs};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-
-#[path = "shared/navmesh.rs"]
-mod navmesh;
-use envfield::rooms::harness::FloorPlanner;
-use navmesh::Navmesh;
 
 #[global_allocator]
 static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
@@ -56,19 +48,8 @@ const SHIPPED_ROOM: u64 = 10_000;
     about = "Navigate people through 3D rooms: ours against RRT, RRT*, PRM and the straight line"
 )]
 struct Args {
-    /// A scene to read instead of a generated room (OBJ or PLY, metres, z up).
-    #[arg(long)]
-    scene: Option<PathBuf>,
-    /// The scene file's up axis: z, or y (glTF, game levels).
-    #[arg(long, default_value = "z")]
-    up: UpAxis,
-    /// The scene file's units: m, cm, mm, or metres per unit.
-    #[arg(long, default_value = "m")]
-    units: Units,
-    /// Furnish the rooms with Sweet Home 3D's furniture models instead of the generator's
-    /// boxes (scripts/fetch_sweethome3d.sh fetches them).
-    #[arg(long)]
-    catalogue: bool,
+    #[command(flatten)]
+    scene: SceneArgs,
     /// Seed of the generated room (10000 and up were never seen by the VAE).
     #[arg(long, default_value_t = SHIPPED_ROOM)]
     seed: u64,
@@ -76,14 +57,14 @@ struct Args {
     #[arg(long, default_value_t = 1)]
     rooms: u64,
     /// Walking pairs per room (sit-down pairs: one per reachable seat).
-    #[arg(long, default_value_t = 4)]
+    #[arg(long, default_value_t = PairOptions::default().walks)]
     pairs: usize,
     /// The VAE's weights (default: the shipped gated VAE, `models/vae_gated.safetensors`,
     /// whose regions hold the seats; `models/vae.safetensors` is the paper's).
     #[arg(long)]
     vae: Option<PathBuf>,
-    /// The learned field's weights for the room (default: models/room_field_<seed>.safetensors
-    /// when it is there; otherwise the field is trained).
+    /// The learned field's weights for the first room (default: a kept one in --fields, or
+    /// models/room_field_<seed>.safetensors when it fits; otherwise the field is trained).
     #[arg(long)]
     field: Option<PathBuf>,
     /// Training steps of a room's learned field.
@@ -92,24 +73,20 @@ struct Args {
     /// Save a trained field here (for a single room).
     #[arg(long)]
     save_field: Option<PathBuf>,
-    /// Keep every trained room field in this folder
-    /// (`room_field_<seed>_<region>_<steps>.safetensors`: the room, a fingerprint of its
-    /// accessible region and the training's settings, and the training steps) and load it
-    /// from there on the next run, so a
-    /// second run of the tables skips the training.
+    /// Keep every trained room field in this folder (named for the room, a fingerprint of its
+    /// region and the training's settings, and the steps) and load it from there on the next
+    /// run, so a second run of the tables skips the training.
     #[arg(long)]
     fields: Option<PathBuf>,
     /// RRT* budget of the second row (raised until its path ratio matches ours).
-    #[arg(long, default_value_t = 5000)]
+    #[arg(long, default_value_t = RunSettings::default().big_budget)]
     big_budget: usize,
     /// Ours' budget: expansions per step of the shortest walk (plus 200); past it, ours falls
-    /// back to the region alone. A learned field's hollow takes many expansions to fill: at 5,
-    /// 2-3% of the walks stopped in one.
-    #[arg(long, default_value_t = 50.0)]
+    /// back to the region alone.
+    #[arg(long, default_value_t = RunSettings::default().budget)]
     budget: f64,
-    /// The same for sit-down pairs: the steps must match the sequence's frames to the seat,
-    /// which takes search too.
-    #[arg(long, default_value_t = 50.0)]
+    /// The same for sit-down pairs.
+    #[arg(long, default_value_t = RunSettings::default().sit_budget)]
     sit_budget: f64,
     /// Torso samples drawn for the accessible region.
     #[arg(long, default_value_t = 6000)]
@@ -125,16 +102,9 @@ struct Args {
     #[arg(long, value_delimiter = ',')]
     planners: Option<Vec<PlannerKind>>,
     /// Write one JSON line per pair and planner here (room, pair, kind, planner, seconds,
-    /// its goal's seconds, reached, relaxed, valid share, path ratio, distance left): where a
-    /// mean's time goes, walk by walk.
+    /// its goal's seconds, reached, relaxed, valid share, path ratio, distance left).
     #[arg(long)]
     walks_out: Option<PathBuf>,
-}
-
-/// Sweet Home 3D's catalogue, fetched by scripts/fetch_sweethome3d.sh.
-fn open_catalogue() -> Result<Catalogue> {
-    let dir = Catalogue::find().context("no catalogue: run scripts/fetch_sweethome3d.sh")?;
-    Ok(Catalogue::read(dir)?)
 }
 
 fn root() -> &'static Path {
@@ -144,100 +114,50 @@ fn root() -> &'static Path {
 /// The room's learned field: `--field`, a kept one in `--fields`, the shipped one, or one
 /// trained now (kept in `--fields`, saved to `--save-field`); its training seconds when
 /// trained.
-/// The metadata key of a kept field's region fingerprint and training steps.
-const REGION_TAG: &str = "room_nav.region";
-
 fn room_field(
     args: &Args,
     k: u64,
     seed: u64,
     region: &AccessibleRegion,
 ) -> Result<(FieldNet, Option<f64>)> {
-    let generated = args.scene.is_none();
+    let generated = args.scene.scene.is_none();
     let mut cfg = Field3Config::default();
     (cfg.steps, cfg.seed) = (args.field_steps, seed);
-    // The region and the training's settings but its steps (which the key names apart): a
-    // field kept under another of either is not this one.
-    let settings = Field3Config {
-        steps: 0,
-        ..cfg.clone()
-    };
-    let fingerprint = format!("{:016x}{:08x}", region_key(region), settings.key() as u32);
-    let key = format!("{fingerprint}_{}", args.field_steps);
-    let cached = args
-        .fields
-        .as_ref()
-        .filter(|_| generated)
-        .map(|d| d.join(format!("room_field_{seed}_{key}.safetensors")));
     let shipped = root().join(format!("models/room_field_{seed}.safetensors"));
-    let file = args
-        .field
-        .clone()
-        .or_else(|| cached.clone().filter(|p| p.is_file()))
-        .or_else(|| Some(shipped).filter(|p| generated && !args.catalogue && p.is_file()));
-    if let Some(f) = file.filter(|_| k == 0 || args.field.is_none()) {
-        // A kept field carries its region's fingerprint: a file planted or left under the
-        // name is not taken for this region's.
-        if cached.as_ref() == Some(&f) {
-            if FieldNet::read_tags(&f, REGION_TAG)?.as_deref() != Some(&key) {
-                bail!(
-                    "{}: not a field of this region (no or another fingerprint); remove it",
-                    f.display()
-                );
-            }
-            eprintln!("room {seed}: field loaded from {}", f.display());
-        }
-        let net = FieldNet::load(&f)?;
-        // A field that carries its region's fingerprint (a kept one, or the shipped one made
-        // from it) fits only that region; one without, any region on a lattice of its shape.
-        let tagged = FieldNet::read_tags(&f, REGION_TAG)?;
-        let same_region = tagged
-            .as_deref()
-            .is_none_or(|t| t.split('_').next() == Some(fingerprint.as_str()));
-        let fits = same_region
-            && matches!(net.config(), ModelConfig::Goal(c) if c.extent == region.frame.shape.to_vec());
-        if fits {
-            return Ok((net, None));
-        }
-        // A field the user named must fit; the shipped one is trained again when it does not.
-        if args.field.is_some() || cached.as_ref() == Some(&f) {
-            bail!(
-                "{}: this field was trained on another region (the VAE or the room changed); \
-                 train it again with --field-steps",
-                f.display()
-            );
-        }
-        eprintln!(
-            "room {seed}: the shipped field {} was trained on another region or otherwise; \
-             training one",
-            f.display()
-        );
-    }
+    let store = FieldStore {
+        named: args.field.clone().filter(|_| k == 0),
+        kept: args.fields.clone().filter(|_| generated),
+        shipped: Some(shipped).filter(|_| generated && !args.scene.catalogue),
+    };
     let style = ProgressStyle::with_template("{msg:>24} {bar:30} {pos}/{len} (eta {eta})")?;
     let bar = ProgressBar::new(args.field_steps).with_style(style);
     bar.set_message(format!("room {seed}: 3D field"));
-    let (net, report) = train_field3(region, &cfg, None, |s, _, _| bar.set_position(s))?;
+    let (net, how) = store.load_or_train(region, &cfg, seed, |s, _, _| bar.set_position(s))?;
     bar.finish_and_clear();
-    eprintln!(
-        "room {seed}: learned field, median error {:.3} m, p95 {:.3} m, {:.0} s",
-        report.median_err_m, report.p95_err_m, report.train_s
-    );
-    // Saved with its region's fingerprint, so a later run knows which region it fits.
-    if let (Some(p), 1) = (&args.save_field, args.rooms) {
-        net.save_tagged(p, &[(REGION_TAG, key.clone())])?;
+    match how {
+        Obtained::Loaded(FieldOrigin::Kept(f)) => {
+            eprintln!("room {seed}: field loaded from {}", f.display())
+        }
+        Obtained::Loaded(_) => {}
+        Obtained::Trained(report, kept) => {
+            eprintln!(
+                "room {seed}: learned field, median error {:.3} m, p95 {:.3} m, {:.0} s{}",
+                report.median_err_m,
+                report.p95_err_m,
+                report.train_s,
+                kept.map(|p| format!(", kept in {}", p.display()))
+                    .unwrap_or_default()
+            );
+            if let (Some(p), 1) = (&args.save_field, args.rooms) {
+                save_tagged(&net, p, region, &cfg)?;
+            }
+            return Ok((net, Some(report.train_s)));
+        }
     }
-    if let Some(p) = &cached {
-        let dir = p.parent().context("a folder")?;
-        std::fs::create_dir_all(dir)
-            .with_context(|| format!("--fields: creating {}", dir.display()))?;
-        net.save_tagged(p, &[(REGION_TAG, key)])?;
-        eprintln!("room {seed}: field kept in {}", p.display());
-    }
-    Ok((net, Some(report.train_s)))
+    Ok((net, None))
 }
 
-fn main() -> Result<()> {
-    let args = Args::parse();
+fn check(args: &Args) -> Result<()> {
     if args.rooms == 0 || args.rooms > 1000 || args.pairs == 0 || args.pairs > 10_000 {
         bail!(
             "--rooms must be in 1..=1000 and --pairs in 1..=10000 (got {} and {})",
@@ -260,6 +180,12 @@ fn main() -> Result<()> {
             bail!("{flag} must be in (0, 10000] (got {b})");
         }
     }
+    Ok(())
+}
+
+fn main() -> Result<()> {
+    let args = Args::parse();
+    check(&args)?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
     envfield::grid::check_writable(args.out.join("top.png"))?;
@@ -269,21 +195,9 @@ fn main() -> Result<()> {
         .unwrap_or_else(|| root().join("models/vae_gated.safetensors"));
     let vae =
         Cvae::load(&vae_file).with_context(|| format!("loading the VAE {}", vae_file.display()))?;
-    let catalogue = args.catalogue.then(open_catalogue).transpose()?;
-    let planners: Vec<PlannerKind> = match &args.planners {
-        Some(p) if p.is_empty() => bail!("--planners: name one planner at least"),
-        Some(p) => PlannerKind::ALL
-            .into_iter()
-            .filter(|k| p.contains(k))
-            .collect(),
-        None => PlannerKind::ALL.to_vec(),
-    };
-    let needs_net = planners.iter().any(|p| {
-        matches!(
-            p.field(),
-            Some(FieldKind::Learned | FieldKind::LearnedTable)
-        )
-    });
+    let rooms = args.scene.rooms(RoomConfig::default())?;
+    let planners = PlannerKind::chosen(args.planners.as_deref()).context("--planners")?;
+    let needs_net = planners.iter().any(|p| p.learned());
     let mut walks_out = args
         .walks_out
         .as_ref()
@@ -298,27 +212,7 @@ fn main() -> Result<()> {
     let (mut region_s, mut memory) = (Vec::new(), Vec::new());
     for k in 0..args.rooms {
         let seed = args.seed + k;
-        let (scene, generated) = match &args.scene {
-            Some(f) => (
-                {
-                    let import = ImportConfig::new(args.up, args.units);
-                    let (scene, report) = read_scene(f, &import)?;
-                    eprintln!("{}: {report}", f.display());
-                    if let Some(w) = check_sample_density(&scene, args.samples)? {
-                        eprintln!("warning: {w}");
-                    }
-                    scene
-                },
-                None,
-            ),
-            None => {
-                let r = match &catalogue {
-                    Some(c) => catalogue_room(c, &RoomConfig::catalogue(), seed)?,
-                    None => generate_room(&RoomConfig::default(), seed)?,
-                };
-                (r.scene.clone(), Some(r))
-            }
-        };
+        let (scene, generated) = args.scene.scene(&rooms, seed, Some(args.samples))?;
         let t = Instant::now();
         let region = sample_region(&vae, &scene, args.samples, seed)?;
         region_s.push(t.elapsed().as_secs_f64());
@@ -347,17 +241,19 @@ fn main() -> Result<()> {
             navmesh: mesh.as_ref().map(|m| (m as &dyn FloorPlanner, m.build_s)),
         };
         memory.push(room.bytes()?);
-        let ps = pairs(generated.as_ref(), &scene, &region, args.pairs, seed)?;
+        let options = PairOptions {
+            walks: args.pairs,
+            seed,
+            ..PairOptions::default()
+        };
+        let ps = pairs(generated.as_ref(), &scene, &region, &options)?;
         for (i, pair) in ps.iter().enumerate() {
-            let budget = match pair.kind {
-                PairKind::Walk => args.budget,
-                PairKind::Sit => args.sit_budget,
-            };
             let settings = RunSettings {
-                budget,
+                budget: args.budget,
+                sit_budget: args.sit_budget,
                 big_budget: args.big_budget,
-                sampler_budget: SamplingConfig::default().budget,
                 seed: seed + i as u64,
+                ..RunSettings::default()
             };
             let runs = run_pair(&room, pair, &room_planners, &settings)?;
             if k == 0 && i == 0 {
@@ -365,14 +261,7 @@ fn main() -> Result<()> {
             }
             if let Some(w) = walks_out.as_mut() {
                 for r in &runs {
-                    let o = &r.outcome;
-                    let line = serde_json::json!({
-                        "room": seed, "pair": i, "kind": pair.kind.name(),
-                        "planner": r.planner.name(), "seconds": o.seconds,
-                        "goal_seconds": o.goal_seconds, "reached": o.reached,
-                        "relaxed": o.relaxed, "valid": o.poses.valid,
-                        "path_ratio": o.path_ratio, "dist_m": o.dist_m,
-                    });
+                    let line = r.record(seed, i, pair.kind);
                     writeln!(w, "{line}").context("--walks-out: writing")?;
                 }
             }
@@ -388,10 +277,7 @@ fn main() -> Result<()> {
     let table4 = tally.table4(&planners, &mut line);
     line["field_train_s_per_room"] = finite_mean(&field_s).into();
     line["region_s_per_room"] = finite_mean(&region_s).into();
-    for (j, (name, _)) in memory.first().into_iter().flatten().enumerate() {
-        let v: Vec<f64> = memory.iter().map(|m| m[j].1 as f64).collect();
-        line[format!("{name}_per_room")] = finite_mean(&v).into();
-    }
+    mean_bytes(&memory, &mut line);
     if !args.json {
         println!("Table 3: {} pairs in {} room(s)", tally.pairs(), args.rooms);
         print!("{table3}");

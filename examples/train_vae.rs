@@ -11,7 +11,7 @@
 
 use anyhow::{bail, Context, Result};
 use clap::Parser;
-use envfield::rooms::{rooms_torsos, TorsoDataConfig};
+use envfield::rooms::torsos::{rooms_torsos, TorsoDataConfig};
 use envfield::vae::{Cvae, TorsoSource, VaeConfig, VaeTrainConfig, VaeTrainer};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;

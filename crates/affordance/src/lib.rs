@@ -7,6 +7,9 @@
 //! - Procedural, seeded motions so nothing needs motion capture: [`walk`], [`sit_down`],
 //!   [`get_up`], [`lie_down`], [`standing_pose`]. Bodies face +x, metres, z up.
 //! - [`check_pose`] / [`check_sequence`] against an [`envfield_scene::Scene`].
+//! - [`sit_on`] and [`lie_on`]: those motions placed on a piece of furniture.
+//! - The torso filter an accessible region is made with ([`afford`], [`afford_all`],
+//!   [`FilterConfig`]): whether some supported, [`plausible`] pose has its torso at a point.
 //! - [`align_to_trajectory`] and [`align_in_scene`] (with the +-6 degree search the paper uses
 //!   for getting up); [`PoseSequence::step_length`] for the 3D planner's step.
 //!
@@ -29,7 +32,9 @@
 mod align;
 mod check;
 mod error;
+mod filter;
 mod motion;
+mod place;
 mod skeleton;
 
 pub use align::{align_in_scene, align_to_trajectory, resample_path, walk_along, AlignConfig};
@@ -37,7 +42,9 @@ pub use check::{
     bones_clear, check_pose, check_sequence, pose_valid, AffordanceConfig, AffordanceReport,
 };
 pub use error::{AffordanceError, Result};
+pub use filter::{afford, afford_all, plausible, Afford, FilterConfig};
 pub use motion::{
     get_up, lie_down, sit_down, standing_pose, walk, LieConfig, SitConfig, WalkConfig,
 };
+pub use place::{lie_on, sit_on};
 pub use skeleton::{Activity, Joint, Pose, PoseSequence, Support, JOINT_COUNT};

@@ -134,14 +134,7 @@ impl Canvas {
     /// # Errors
     /// [`GridError`](crate::GridError) from the encoder (it does not fail on a canvas).
     pub fn png_bytes(&self) -> Result<Vec<u8>> {
-        let mut buf = Vec::new();
-        image::codecs::png::PngEncoder::new(&mut buf).write_image(
-            self.img.as_raw(),
-            self.width(),
-            self.height(),
-            image::ExtendedColorType::Rgb8,
-        )?;
-        Ok(buf)
+        encode_png(&self.img)
     }
 
     /// Writes the picture as PNG, atomically.
@@ -170,6 +163,55 @@ impl Canvas {
         }
         write_atomic(path, &bytes)
     }
+}
+
+/// `img` encoded as PNG: the one PNG encoder of the picture kit.
+pub(crate) fn encode_png(img: &image::RgbImage) -> Result<Vec<u8>> {
+    let mut buf = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut buf).write_image(
+        img.as_raw(),
+        img.width(),
+        img.height(),
+        image::ExtendedColorType::Rgb8,
+    )?;
+    Ok(buf)
+}
+
+/// Linear between evenly spaced `stops`, `t` in `[0, 1]` (clamped).
+fn ramp(stops: &[[f32; 3]], t: f32) -> [u8; 3] {
+    let x = t.clamp(0.0, 1.0) * (stops.len() - 1) as f32;
+    let i = (x.floor() as usize).min(stops.len() - 2);
+    let f = x - i as f32;
+    [0, 1, 2].map(|k| (stops[i][k] * (1.0 - f) + stops[i + 1][k] * f).round() as u8)
+}
+
+/// Viridis, sampled at 6 points: dark purple at 0, yellow at 1 (the heat maps' distances).
+pub fn viridis(t: f32) -> [u8; 3] {
+    ramp(
+        &[
+            [68.0, 1.0, 84.0],
+            [65.0, 68.0, 135.0],
+            [42.0, 120.0, 142.0],
+            [34.0, 168.0, 132.0],
+            [122.0, 209.0, 81.0],
+            [253.0, 231.0, 37.0],
+        ],
+        t,
+    )
+}
+
+/// A height from 0 (low) to 1 (high) as dark blue through teal and green to yellow (plan
+/// views and point clouds of 3D regions).
+pub fn height_colour(t: f32) -> [u8; 3] {
+    ramp(
+        &[
+            [40.0, 50.0, 140.0],
+            [30.0, 140.0, 150.0],
+            [110.0, 190.0, 80.0],
+            [250.0, 225.0, 60.0],
+        ],
+        t,
+    )
 }
 
 /// `colour` mixed with white: `keep` of the colour, the rest white.

@@ -56,7 +56,7 @@ mod steps;
 mod symmetry;
 pub mod synth;
 
-pub use canvas::{tint, Canvas};
+pub use canvas::{height_colour, tint, viridis, Canvas};
 pub use cell::{Cell2, Cell3, Point2, Point3};
 pub use components::Components;
 pub use ensemble::Ensemble;

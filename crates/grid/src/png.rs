@@ -1,8 +1,8 @@
 //! PNG input (occupancy grids) and output (heat maps of fields with paths).
 
 use crate::io::write_atomic;
-use crate::{Cell2, Field2, Grid2, GridError, Result};
-use image::{ImageEncoder, Rgb, RgbImage};
+use crate::{viridis, Cell2, Field2, Grid2, GridError, Result};
+use image::{Rgb, RgbImage};
 use std::path::Path;
 
 /// The most pixels [`Grid2::from_png_bytes`] decodes (16384 x 16384).
@@ -72,7 +72,7 @@ impl Grid2 {
                 Rgb([255, 255, 255])
             }
         });
-        write_atomic(path, &encode_png(&img)?)
+        write_atomic(path, &crate::canvas::encode_png(&img)?)
     }
 }
 
@@ -110,37 +110,6 @@ impl Default for HeatMapStyle<'_> {
 pub const OBSTACLE_COLOR: [u8; 3] = [0, 0, 0];
 /// Free cells with an infinite value (unreachable).
 pub const UNREACHABLE_COLOR: [u8; 3] = [110, 110, 110];
-
-/// Viridis, sampled at 6 points; `t` in `[0, 1]`.
-fn viridis(t: f32) -> [u8; 3] {
-    const STOPS: [[f32; 3]; 6] = [
-        [68.0, 1.0, 84.0],
-        [65.0, 68.0, 135.0],
-        [42.0, 120.0, 142.0],
-        [34.0, 168.0, 132.0],
-        [122.0, 209.0, 81.0],
-        [253.0, 231.0, 37.0],
-    ];
-    let x = t.clamp(0.0, 1.0) * (STOPS.len() - 1) as f32;
-    let i = (x.floor() as usize).min(STOPS.len() - 2);
-    let f = x - i as f32;
-    let mut out = [0u8; 3];
-    for k in 0..3 {
-        out[k] = (STOPS[i][k] * (1.0 - f) + STOPS[i + 1][k] * f).round() as u8;
-    }
-    out
-}
-
-fn encode_png(img: &RgbImage) -> Result<Vec<u8>> {
-    let mut buf = Vec::new();
-    image::codecs::png::PngEncoder::new(&mut buf).write_image(
-        img.as_raw(),
-        img.width(),
-        img.height(),
-        image::ExtendedColorType::Rgb8,
-    )?;
-    Ok(buf)
-}
 
 impl Field2 {
     /// Renders the field as a heat map (viridis: dark = near, yellow = far), obstacles black,
@@ -203,7 +172,7 @@ impl Field2 {
     /// # Errors
     /// As [`Field2::heat_map`], plus [`GridError::Io`] and [`GridError::Image`].
     pub fn write_png(&self, path: impl AsRef<Path>, style: &HeatMapStyle<'_>) -> Result<()> {
-        write_atomic(path, &encode_png(&self.heat_map(style)?)?)
+        write_atomic(path, &crate::canvas::encode_png(&self.heat_map(style)?)?)
     }
 }
 

@@ -166,7 +166,7 @@ impl Field3Config {
     /// A fingerprint of every setting (FNV-1a of its JSON): a field kept under it was trained
     /// this way, so a cache of fields can tell when the training changed.
     pub fn key(&self) -> u64 {
-        crate::draw::fnv1a(serde_json::to_string(self).unwrap_or_default().into_bytes())
+        crate::sampling::fnv1a(serde_json::to_string(self).unwrap_or_default().into_bytes())
     }
 
     /// An error naming the first setting that cannot work.

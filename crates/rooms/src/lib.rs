@@ -40,33 +40,25 @@
 //! ```
 
 pub mod birdseye;
-mod draw;
 mod error;
-mod field3;
+pub mod field3;
+pub mod field3_store;
 mod field3_train;
 pub mod harness;
-mod nav;
+pub mod nav;
 pub mod pictures;
+pub mod quality;
 pub mod region;
-mod surfaces;
+pub mod sampling;
+pub mod surfaces;
 pub mod tables;
-mod torsos;
+pub mod torsos;
 
-pub use draw::{
-    check_sample_density, draw_torsos, middle_goal, region_key, sample_region, vae_cloud,
-    MAX_SAMPLES, SAMPLES_PER_M2,
-};
 pub use error::{Result, RoomsError};
 pub use field3::{ExactField3, LearnedField3, VoxelField3};
+pub use field3_store::FieldStore;
 pub use field3_train::{train_field3, Field3Config, Field3Report};
-pub use nav::{clear_beneath, offset, point, PoseFilter, SceneTables, BENEATH_CELL, DISTANCE_CELL};
-pub use region::{
-    afford, afford_all, covered_pct, drawn_summary, implausible, judge_region, plausible,
-    region_quality, summarise_drawn, uniform_in_room, AccessibleRegion, Afford, RegionConfig,
-    RegionQuality, SitDown, SEAT_NEAR,
-};
-pub use surfaces::{standing_torsos, MAX_COLUMNS, MAX_SLOPE_DEG};
-pub use torsos::{
-    lie_on, pose_kind, room_torsos, rooms_torsos, seat_grid, seat_torsos, sit_on, standing_floor,
-    TorsoDataConfig,
-};
+pub use nav::{PoseFilter, SceneTables};
+pub use region::{AccessibleRegion, RegionConfig, SitDown};
+pub use sampling::{draw_torsos, sample_region};
+pub use surfaces::standing_torsos;

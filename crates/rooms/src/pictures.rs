@@ -2,9 +2,12 @@
 //! room from above one wall with paths and poses, and a top view of a 3D field.
 
 use crate::harness::{PlannerKind, Run};
-use crate::{point, AccessibleRegion, Result, RoomsError};
+use crate::nav::point;
+use crate::{AccessibleRegion, Result, RoomsError};
 use envfield_affordance::{Joint, Pose};
-use envfield_grid::{Canvas, Cell3, ContinuousField3, Field2, HeatMapStyle, Point3m};
+use envfield_grid::{
+    height_colour, Canvas, Cell3, ContinuousField3, Field2, HeatMapStyle, Point3m,
+};
 use envfield_scene::nalgebra::{Point3, Vector3};
 use envfield_scene::{write_polyline_obj, ObjectKind, Scene};
 use rayon::prelude::*;
@@ -52,21 +55,6 @@ pub fn height_view(
     plan_view(region, scale.max(1), paths, Ends::Every, |z| {
         height_colour(z.saturating_sub(lo) as f32 / span)
     })
-}
-
-/// A height from 0 (low) to 1 (high) as a colour from dark blue through teal and green to
-/// yellow.
-fn height_colour(t: f32) -> [u8; 3] {
-    const STOPS: [[f32; 3]; 4] = [
-        [40.0, 50.0, 140.0],
-        [30.0, 140.0, 150.0],
-        [110.0, 190.0, 80.0],
-        [250.0, 225.0, 60.0],
-    ];
-    let t = t.clamp(0.0, 1.0) * (STOPS.len() - 1) as f32;
-    let i = (t as usize).min(STOPS.len() - 2);
-    let f = t - i as f32;
-    [0, 1, 2].map(|c| (STOPS[i][c] + f * (STOPS[i + 1][c] - STOPS[i][c])) as u8)
 }
 
 /// A world point's pixel in a top view of `scale` pixels a voxel.

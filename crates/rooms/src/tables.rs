@@ -223,3 +223,14 @@ impl Tally {
         text
     }
 }
+
+/// Puts the mean over rooms of each of `per_room`'s byte counts ([`RoomContext::bytes`]
+/// of each room) into `line` as `<name>_per_room`.
+///
+/// [`RoomContext::bytes`]: crate::harness::RoomContext::bytes
+pub fn mean_bytes(per_room: &[[(&'static str, usize); 6]], line: &mut Value) {
+    for (j, (name, _)) in per_room.first().into_iter().flatten().enumerate() {
+        let v: Vec<f64> = per_room.iter().map(|m| m[j].1 as f64).collect();
+        line[format!("{name}_per_room")] = finite_mean(&v).into();
+    }
+}

@@ -4,15 +4,14 @@
 
 use crate::{Result, RoomsError};
 use envfield_affordance::{
-    check_pose, check_sequence, lie_down, sit_down, standing_pose, walk, walk_along,
-    AffordanceConfig, LieConfig, Pose, PoseSequence, SitConfig, Support, WalkConfig,
+    afford_all, check_pose, check_sequence, lie_on, plausible, sit_on, standing_pose, walk,
+    walk_along, AffordanceConfig, FilterConfig, Pose, PoseSequence, Support, WalkConfig,
 };
 use envfield_eikonal::FastMarching;
 use envfield_grid::{MoveRule, SplitMix64};
 use envfield_scene::nalgebra::{Point3, Vector3};
 use envfield_scene::{
-    floor_map, generate_room, sample_surface, FloorMapConfig, Furniture, ObjectKind, Room,
-    RoomConfig, Scene,
+    floor_map, generate_room, sample_surface, FloorMapConfig, ObjectKind, Room, RoomConfig, Scene,
 };
 use envfield_vae::{PoseKind, RoomTorsos, TorsoSource};
 use rayon::prelude::*;
@@ -32,7 +31,7 @@ pub struct TorsoDataConfig {
     /// Resolution of the floor map the walks are planned on, metres.
     pub floor_resolution: f32,
     /// Keep only the torso locations where the accessible region's filter
-    /// ([`afford`](crate::afford) with [`RegionConfig::default`](crate::RegionConfig)) finds a
+    /// ([`afford`](envfield_affordance::afford) with the default [`FilterConfig`]) finds a
     /// full pose: the frames in the middle of sitting or lying down, valid as frames of their
     /// sequence, afford no standing, sitting or lying pose of their own, and a VAE trained on
     /// them draws torsos the filter then finds wanting.
@@ -75,69 +74,6 @@ fn valid_torsos(scene: &Scene, seq: &PoseSequence) -> Result<Vec<[f32; 3]>> {
         .collect())
 }
 
-/// `seq` turned so that its +x faces `front` (about the origin), then moved by `to`.
-fn placed(seq: &PoseSequence, front: [f32; 2], to: Vector3<f32>) -> Result<PoseSequence> {
-    let angle = front[1].atan2(front[0]);
-    let frames = seq
-        .frames
-        .iter()
-        .map(|f| f.rotated_about_z(angle, &Point3::origin()).translated(&to))
-        .collect();
-    Ok(PoseSequence::new(
-        seq.fps,
-        seq.activity,
-        frames,
-        seq.supports.clone(),
-    )?)
-}
-
-/// The direction a piece of furniture's front faces.
-fn front(f: &Furniture) -> [f32; 2] {
-    let (s, c) = f.yaw.sin_cos();
-    [-s, c]
-}
-
-/// Sitting down onto the middle of `seat` (facing its front), when it has a seat between 0.3
-/// and 0.75 m.
-pub fn sit_on(seat: &Furniture) -> Result<Option<PoseSequence>> {
-    let (Some(h), Some(c)) = (seat.seat_height, seat.seat_center()) else {
-        return Ok(None);
-    };
-    if !(0.3..=0.75).contains(&h) {
-        return Ok(None);
-    }
-    let seq = sit_down(&SitConfig {
-        seat_height: h,
-        ..SitConfig::default()
-    })?;
-    Ok(Some(placed(
-        &seq,
-        front(seat),
-        Vector3::new(c.x, c.y, 0.0),
-    )?))
-}
-
-/// Lying down on `bed`: seated on its front edge, facing out, then on the back towards its
-/// head end.
-pub fn lie_on(bed: &Furniture) -> Result<Option<PoseSequence>> {
-    let (Some(h), Some(c)) = (bed.seat_height, bed.seat_center()) else {
-        return Ok(None);
-    };
-    if !(0.3..=0.75).contains(&h) || !matches!(bed.kind, ObjectKind::Bed | ObjectKind::Sofa) {
-        return Ok(None);
-    }
-    let f = front(bed);
-    // From the front edge, a quarter of the depth back in; slide half the depth.
-    let edge = bed.size[1] / 2.0 - 0.25;
-    let seq = lie_down(&LieConfig {
-        seat_height: h,
-        slide: (bed.size[1] / 2.0).clamp(0.0, 1.0),
-        ..LieConfig::default()
-    })?;
-    let to = Vector3::new(c.x + f[0] * edge, c.y + f[1] * edge, 0.0);
-    Ok(Some(placed(&seq, f, to)?))
-}
-
 /// The standing pose with its torso at `(x, y)` over the floor, facing +x.
 fn standing_at(x: f32, y: f32) -> Pose {
     let p = standing_pose();
@@ -147,13 +83,13 @@ fn standing_at(x: f32, y: f32) -> Pose {
 
 /// The region's filter, each torso judged where it is (no settling): training data keeps
 /// the torsos it judged.
-fn judged_in_place() -> crate::RegionConfig {
-    crate::RegionConfig::default().in_place()
+fn judged_in_place() -> FilterConfig {
+    FilterConfig::default().in_place()
 }
 
 /// The torso locations of every standing pose on a floor grid of `spacing` metres over
 /// `bounds` (`[x_min, y_min, x_max, y_max]`, the floor at z = 0) that is supported,
-/// collision-free and [`plausible`](crate::plausible) (no bone through geometry: the floor
+/// collision-free and [`plausible`] (no bone through geometry: the floor
 /// under a table, where the top would pass between the knees and the hips, is not standing
 /// floor): the standing-affordable floor.
 ///
@@ -189,7 +125,7 @@ pub fn standing_floor(scene: &Scene, bounds: [f32; 4], spacing: f32) -> Result<V
             )?;
             let t = pose.torso();
             let fits = r.valid()
-                && crate::region::plausible(
+                && plausible(
                     scene,
                     &pose,
                     Support::Standing,
@@ -311,7 +247,7 @@ pub fn room_torsos(room: &Room, cfg: &TorsoDataConfig, seed: u64) -> Result<Room
         standing_floor(scene, bounds, cfg.floor_spacing)?,
         TorsoSource::Stand,
     );
-    let mut kinds: Vec<Option<PoseKind>> = crate::afford_all(scene, &torsos, &judged_in_place())?
+    let mut kinds: Vec<Option<PoseKind>> = afford_all(scene, &torsos, &judged_in_place())?
         .iter()
         .map(|a| a.valid.filter(|_| a.kept()).map(pose_kind))
         .collect();
@@ -347,8 +283,8 @@ pub fn room_torsos(room: &Room, cfg: &TorsoDataConfig, seed: u64) -> Result<Room
 
 /// The torso locations on a grid of `spacing` over each chair, sofa and bed (its rotated
 /// footprint's bounding box), at heights 0 to 0.25 m above its seat in steps of 2.5 cm,
-/// where the region's filter ([`afford`](crate::afford), default
-/// [`RegionConfig`](crate::RegionConfig)) finds a sitting or lying pose, with that kind.
+/// where the region's filter ([`afford`](envfield_affordance::afford), default
+/// [`FilterConfig`]) finds a sitting or lying pose, with that kind.
 ///
 /// # Errors
 /// [`RoomsError::InvalidConfig`] for a spacing under 1 cm; errors of the filter.
@@ -381,7 +317,7 @@ pub fn seat_grid(room: &Room, spacing: f32) -> Result<Vec<([f32; 3], Support)>> 
             }
         }
     }
-    let affords = crate::afford_all(&room.scene, &tries, &judged_in_place())?;
+    let affords = afford_all(&room.scene, &tries, &judged_in_place())?;
     Ok(tries
         .into_iter()
         .zip(affords)

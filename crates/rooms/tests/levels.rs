@@ -78,6 +78,7 @@ fn the_standing_region_joins_two_floors_by_their_ramp_and_ours_climbs_it() {
         big_budget: 0,
         sampler_budget: 500,
         seed: 1,
+        ..RunSettings::default()
     };
     let runs = run_pair(&room, &pair, &[PlannerKind::OursExact], &settings).unwrap();
     let ours = &runs[0];

@@ -3,9 +3,10 @@
 //! few centimetres of it, closer than swinging arms allow. Both reach the goal; only the search
 //! with affordance keeps every pose valid.
 
+use envfield_affordance::afford;
 use envfield_affordance::{align_in_scene, resample_path, walk, AlignConfig, WalkConfig};
 use envfield_plan::space3::{rrt, FieldSearch3, SamplingConfig};
-use envfield_rooms::{afford, AccessibleRegion, ExactField3, PoseFilter, RegionConfig};
+use envfield_rooms::{AccessibleRegion, ExactField3, PoseFilter, RegionConfig};
 use envfield_scene::nalgebra::{Isometry3, Point3};
 use envfield_scene::{ObjectKind, Primitive, Scene, SceneObject};
 
@@ -50,7 +51,7 @@ fn region_at(scene: &Scene, z: f32) -> AccessibleRegion {
     for i in 0..80 {
         for j in 0..40 {
             let p = [0.025 + 0.05 * i as f32, 0.025 + 0.05 * j as f32, z];
-            if afford(scene, p, &config).unwrap().kept() {
+            if afford(scene, p, &config.filter).unwrap().kept() {
                 kept.push(p);
             }
         }
@@ -224,6 +225,7 @@ fn ours_reads_its_field_and_distances_once_and_the_costs_are_split() {
         big_budget: 1000,
         sampler_budget: 500,
         seed: 1,
+        ..RunSettings::default()
     };
     let e = run_pair(&room, &pair, &[PlannerKind::Navmesh], &settings)
         .unwrap_err()

@@ -2,14 +2,14 @@
 //! otherwise empty room. A body standing with the table top between its knees and hips has
 //! every joint clear, so the joint checks pass it; the bone check does not.
 
+use envfield_affordance::{afford, plausible, FilterConfig};
 use envfield_affordance::{
     bones_clear, check_pose, sit_down, standing_pose, AffordanceConfig, Pose, SitConfig, Support,
 };
 use envfield_plan::space3::straight_line;
-use envfield_rooms::{
-    afford, clear_beneath, implausible, plausible, AccessibleRegion, PoseFilter, RegionConfig,
-    SitDown,
-};
+use envfield_rooms::nav::clear_beneath;
+use envfield_rooms::quality::implausible;
+use envfield_rooms::{AccessibleRegion, PoseFilter, RegionConfig, SitDown};
 use envfield_scene::nalgebra::{Isometry3, Point3, Vector3};
 use envfield_scene::{Furniture, ObjectKind, Primitive, Room, Scene, SceneObject};
 
@@ -85,8 +85,8 @@ fn a_body_standing_through_a_table_top_passes_the_joints_but_not_the_bones() {
     let torso: [f32; 3] = through.torso().into();
     assert_eq!(implausible(&room, torso).unwrap(), Some(ObjectKind::Table));
     // The filter keeps that torso only with the rule off.
-    let on = RegionConfig::default();
-    let off = RegionConfig {
+    let on = FilterConfig::default();
+    let off = FilterConfig {
         plausible: false,
         settle: 0.0,
         ..on
@@ -230,7 +230,7 @@ fn seat_region() -> (Room, AccessibleRegion, f32, f32) {
     }
     let kept: Vec<[f32; 3]> = drawn
         .iter()
-        .map(|&p| afford(&room.scene, p, &config).unwrap())
+        .map(|&p| afford(&room.scene, p, &config.filter).unwrap())
         .filter(|a| a.kept())
         .map(|a| a.at)
         .collect();
@@ -268,7 +268,7 @@ fn a_seat_joins_the_region_through_a_sit_down() {
         assert!((last - Point3::from(sit.seated)).norm() < 1e-4, "{sit:?}");
         assert!(sit.seated[2] < sit.start[2] - 0.2, "it sits down: {sit:?}");
         for (pose, &support) in seq.frames.iter().zip(&seq.supports) {
-            let r = check_pose(&room.scene, pose, support, &config.affordance).unwrap();
+            let r = check_pose(&room.scene, pose, support, &config.filter.affordance).unwrap();
             assert!(r.valid(), "{sit:?}: {r:?}");
         }
     }

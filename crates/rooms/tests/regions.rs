@@ -1,11 +1,10 @@
 //! The accessible region, the 3D fields and the VAEs trained on rooms: behaviour checked
 //! against known answers, and bad input refused with a clear error.
 
+use envfield_affordance::afford;
 use envfield_grid::{Cell3, ContinuousField3, Grid3};
-use envfield_rooms::{
-    afford, room_torsos, AccessibleRegion, ExactField3, Field3Config, LearnedField3, RegionConfig,
-    TorsoDataConfig,
-};
+use envfield_rooms::torsos::{room_torsos, TorsoDataConfig};
+use envfield_rooms::{AccessibleRegion, ExactField3, Field3Config, LearnedField3, RegionConfig};
 use envfield_scene::{generate_room, RoomConfig, Scene, TriangleMesh, VoxelFrame};
 use envfield_vae::{
     Cvae, Gate, SampleOptions, TorsoSource, VaeConfig, VaeError, VaeTrainConfig, VaeTrainer,
@@ -41,7 +40,7 @@ fn a_scene_with_no_floor_has_no_accessible_region() {
     let config = RegionConfig::default();
     let kept: Vec<_> = samples
         .iter()
-        .filter(|&&s| afford(&scene, s, &config).unwrap().kept())
+        .filter(|&&s| afford(&scene, s, &config.filter).unwrap().kept())
         .copied()
         .collect();
     assert!(kept.is_empty());
@@ -49,7 +48,7 @@ fn a_scene_with_no_floor_has_no_accessible_region() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("no floor"), "{e}");
-    assert!(afford(&scene, [f32::NAN, 0.0, 1.0], &config).is_err());
+    assert!(afford(&scene, [f32::NAN, 0.0, 1.0], &config.filter).is_err());
 }
 
 /// In a room, a torso at standing height over open floor is kept and affords standing; one
@@ -66,10 +65,10 @@ fn the_filter_keeps_standing_torsos_and_drops_ones_in_walls() {
         .find(|(_, s)| **s == TorsoSource::Stand)
         .map(|(t, _)| *t)
         .unwrap();
-    let a = afford(&room.scene, standing, &config).unwrap();
+    let a = afford(&room.scene, standing, &config.filter).unwrap();
     assert!(a.kept() && a.valid.is_some(), "{a:?}");
     let in_wall = [-0.05, room.size[1] / 2.0, 1.0];
-    assert!(!afford(&room.scene, in_wall, &config).unwrap().kept());
+    assert!(!afford(&room.scene, in_wall, &config.filter).unwrap().kept());
 }
 
 /// A region built by hand: an open 3 x 2 x 1 box of voxels.
@@ -403,7 +402,8 @@ fn the_shipped_local_vae_samples_an_unseen_room() {
         .map(|p| <[f32; 3]>::from(*p))
         .collect();
     let samples = vae.sample(&points, &SampleOptions::new(3000, 3)).unwrap();
-    let q = envfield_rooms::region_quality(&room, &samples, &RegionConfig::default()).unwrap();
+    let q =
+        envfield_rooms::quality::region_quality(&room, &samples, &RegionConfig::default()).unwrap();
     assert!(q.affordable_pct > 60.0, "{q:?}");
     assert!(q.floor_coverage_pct > 90.0, "{q:?}");
     assert!(q.seat_coverage_pct > 0.0, "{q:?}");
@@ -542,15 +542,15 @@ fn the_seat_grid_finds_a_place_on_every_seat() {
     let config = RegionConfig::default();
     for seed in [5, 6] {
         let room = generate_room(&RoomConfig::default(), seed).unwrap();
-        let grid = envfield_rooms::seat_grid(&room, 0.1).unwrap();
+        let grid = envfield_rooms::torsos::seat_grid(&room, 0.1).unwrap();
         assert!(!grid.is_empty());
         for (t, kind) in &grid {
             assert!(matches!(kind, Support::Sitting | Support::Lying));
-            let a = afford(&room.scene, *t, &config).unwrap();
+            let a = afford(&room.scene, *t, &config.filter).unwrap();
             assert!(a.kept() && a.valid == Some(*kind), "{t:?}: {a:?}");
         }
-        for s in envfield_rooms::seat_torsos(&room).unwrap() {
-            if afford(&room.scene, s, &config).unwrap().valid.is_none() {
+        for s in envfield_rooms::torsos::seat_torsos(&room).unwrap() {
+            if afford(&room.scene, s, &config.filter).unwrap().valid.is_none() {
                 continue;
             }
             let near = grid.iter().map(|(t, _)| {
@@ -563,12 +563,13 @@ fn the_seat_grid_finds_a_place_on_every_seat() {
             );
         }
     }
-    assert!(
-        envfield_rooms::seat_grid(&generate_room(&RoomConfig::default(), 5).unwrap(), 0.0)
-            .unwrap_err()
-            .to_string()
-            .contains("spacing")
-    );
+    assert!(envfield_rooms::torsos::seat_grid(
+        &generate_room(&RoomConfig::default(), 5).unwrap(),
+        0.0
+    )
+    .unwrap_err()
+    .to_string()
+    .contains("spacing"));
 }
 
 /// The shipped gated VAE, on a room it never saw: nearly every kept sample affords a pose, the
@@ -587,7 +588,8 @@ fn the_shipped_gated_vae_samples_an_unseen_room() {
         .map(|p| <[f32; 3]>::from(*p))
         .collect();
     let samples = vae.sample(&points, &SampleOptions::new(3000, 3)).unwrap();
-    let q = envfield_rooms::region_quality(&room, &samples, &RegionConfig::default()).unwrap();
+    let q =
+        envfield_rooms::quality::region_quality(&room, &samples, &RegionConfig::default()).unwrap();
     assert!(q.affordable_pct > 90.0, "{q:?}");
     assert!(q.floor_coverage_pct > 95.0, "{q:?}");
     assert!(q.seat_coverage_pct >= 50.0, "{q:?}");

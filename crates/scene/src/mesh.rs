@@ -278,18 +278,39 @@ impl TriangleMesh {
     }
 }
 
-/// Writes points (a sampled point cloud) as an ASCII PLY file, atomically.
+/// Writes points (a sampled point cloud, a region's voxels) as an ASCII PLY file, atomically;
+/// with `colours`, one RGB colour per point as `red`, `green`, `blue`.
 ///
 /// # Errors
-/// I/O errors.
-pub fn write_point_cloud(points: &[Point3<f32>], path: impl AsRef<Path>) -> Result<()> {
+/// [`SceneError::InvalidInput`] for colours that are not one per point; I/O errors.
+pub fn write_point_cloud(
+    points: &[Point3<f32>],
+    colours: Option<&[[u8; 3]]>,
+    path: impl AsRef<Path>,
+) -> Result<()> {
+    if let Some(c) = colours.filter(|c| c.len() != points.len()) {
+        return Err(SceneError::InvalidInput(format!(
+            "a point cloud of {} points given {} colours",
+            points.len(),
+            c.len()
+        )));
+    }
+    let colour_header = if colours.is_some() {
+        "property uchar red\nproperty uchar green\nproperty uchar blue\n"
+    } else {
+        ""
+    };
     let mut s = format!(
         "ply\nformat ascii 1.0\ncomment envfield-scene points\nelement vertex {}\n\
-         property float x\nproperty float y\nproperty float z\nend_header\n",
+         property float x\nproperty float y\nproperty float z\n{colour_header}end_header\n",
         points.len()
     );
-    for p in points {
-        let _ = writeln!(s, "{} {} {}", p.x, p.y, p.z);
+    for (i, p) in points.iter().enumerate() {
+        let _ = write!(s, "{} {} {}", p.x, p.y, p.z);
+        if let Some([r, g, b]) = colours.map(|c| c[i]) {
+            let _ = write!(s, " {r} {g} {b}");
+        }
+        s.push('\n');
     }
     envfield_grid::write_atomic(path, s.as_bytes())?;
     Ok(())

@@ -9,11 +9,11 @@
 //! plane. Recast makes every flat top a body fits on walkable (a bed, a table); the pairs walk
 //! on the floor, so only the floor's triangles are walkable here and the rest are obstacles.
 
-use envfield::affordance::PoseSequence;
-use envfield::grid::Point3m;
-use envfield::rooms::harness::FloorPlanner;
-use envfield::rooms::{Result as RoomsResult, RoomsError};
-use envfield::scene::Scene;
+use envfield_affordance::PoseSequence;
+use envfield_grid::Point3m;
+use envfield_rooms::harness::FloorPlanner;
+use envfield_rooms::{Result as RoomsResult, RoomsError};
+use envfield_scene::Scene;
 use glam::{UVec3, Vec2, Vec3, Vec3A};
 use rerecast::{AreaType, BuildContoursFlags, DetailNavmesh, HeightfieldBuilder, TriMesh};
 use std::time::Instant;
@@ -79,6 +79,10 @@ fn failed(stage: &str, e: impl std::fmt::Debug) -> RoomsError {
 
 impl Navmesh {
     /// Builds the navigation mesh of `scene` (floor at z = 0) for the body of `config`.
+    ///
+    /// # Errors
+    /// [`RoomsError::InvalidInput`] naming the stage of Recast's pipeline that failed (a
+    /// scene with no triangles, a floor too small for the body).
     pub fn build(scene: &Scene, config: &NavmeshConfig) -> RoomsResult<Self> {
         let t = Instant::now();
         let source = scene.to_mesh();
@@ -162,7 +166,6 @@ impl Navmesh {
 impl Navmesh {
     /// The room's navigation mesh for the walking body of `gait`, its size and build time
     /// printed, or `None` (said, with the reason) where Recast builds none.
-    #[allow(dead_code)] // room_nav's; the bench builds its own.
     pub fn for_room(scene: &Scene, gait: &PoseSequence, seed: u64) -> Option<Self> {
         match Self::build(scene, &NavmeshConfig::for_gait(gait)) {
             Ok(m) => {

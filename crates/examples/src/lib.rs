@@ -1,0 +1,11 @@
+//! What envfield's examples and benches share, so that each example stays arguments, calls
+//! and printing: the scene flags (`--scene --up --units --catalogue`) as one clap group with
+//! its loader ([`SceneArgs`]), and the navigation-mesh baseline of the room tables
+//! ([`Navmesh`]: Recast's pipeline in Rust and Polyanya's any-angle search, crates the
+//! library must not depend on). Not published.
+
+mod navmesh;
+mod scene_args;
+
+pub use navmesh::{Navmesh, NavmeshConfig};
+pub use scene_args::{RoomMaker, SceneArgs};

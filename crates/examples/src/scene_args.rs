@@ -1,0 +1,118 @@
+//! The scene flags every 3D example takes, and the scenes they name: a file of the user's, a
+//! generated room, or a room furnished with Sweet Home 3D's models.
+
+use anyhow::{Context, Result};
+use envfield_rooms::sampling::check_sample_density;
+use envfield_scene::{
+    catalogue_room, generate_room, read_scene, Catalogue, ImportConfig, Room, RoomConfig, Scene,
+    Units, UpAxis,
+};
+use std::path::PathBuf;
+
+/// Where a 3D example's scene comes from (`#[command(flatten)]` it into an example's
+/// arguments): `--scene FILE` with its `--up` axis and `--units`, or a generated room,
+/// furnished from Sweet Home 3D's catalogue with `--catalogue`.
+#[derive(Clone, Debug, clap::Args)]
+pub struct SceneArgs {
+    /// A scene to read instead of a generated room (OBJ or PLY; metres and z up unless
+    /// --up and --units say otherwise).
+    #[arg(long, alias = "room")]
+    pub scene: Option<PathBuf>,
+    /// The scene file's up axis: z, or y (glTF, game levels).
+    #[arg(long, default_value = "z")]
+    pub up: UpAxis,
+    /// The scene file's units: m, cm, mm, or metres per unit.
+    #[arg(long, default_value = "m")]
+    pub units: Units,
+    /// Furnish the rooms with Sweet Home 3D's furniture models instead of the generator's
+    /// boxes (scripts/fetch_sweethome3d.sh fetches them).
+    #[arg(long)]
+    pub catalogue: bool,
+}
+
+impl SceneArgs {
+    /// The scene file, read and turned to metres and z up, with what the import did printed
+    /// to stderr; `None` without `--scene`. With `samples`, a warning when that many torso
+    /// samples are too few for the scene's floor.
+    ///
+    /// # Errors
+    /// The file's import errors, naming it.
+    pub fn read(&self, samples: Option<usize>) -> Result<Option<Scene>> {
+        let Some(file) = &self.scene else {
+            return Ok(None);
+        };
+        let (scene, report) = read_scene(file, &ImportConfig::new(self.up, self.units))
+            .with_context(|| format!("reading the scene {}", file.display()))?;
+        eprintln!("{}: {report}", file.display());
+        if let Some(n) = samples {
+            if let Some(w) = check_sample_density(&scene, n)? {
+                eprintln!("warning: {w}");
+            }
+        }
+        Ok(Some(scene))
+    }
+
+    /// The maker of generated rooms of `config` (with `--catalogue`, furnished from the
+    /// catalogue with [`RoomConfig::catalogue`]'s layout instead).
+    ///
+    /// # Errors
+    /// No catalogue found with `--catalogue` (scripts/fetch_sweethome3d.sh fetches it), or
+    /// one that cannot be read.
+    pub fn rooms(&self, config: RoomConfig) -> Result<RoomMaker> {
+        let catalogue = if self.catalogue {
+            let dir = Catalogue::find()
+                .context("no Sweet Home 3D catalogue: run scripts/fetch_sweethome3d.sh")?;
+            let read = Catalogue::read(&dir)
+                .with_context(|| format!("reading the catalogue at {}", dir.display()))?;
+            Some(read)
+        } else {
+            None
+        };
+        Ok(RoomMaker { catalogue, config })
+    }
+
+    /// The scene of room `seed`: the file's when `--scene` names one (the same for every
+    /// seed), the generated or furnished room's otherwise, with the room itself (its known
+    /// furniture) in that case.
+    ///
+    /// # Errors
+    /// As [`SceneArgs::read`] and [`RoomMaker::room`].
+    pub fn scene(
+        &self,
+        rooms: &RoomMaker,
+        seed: u64,
+        samples: Option<usize>,
+    ) -> Result<(Scene, Option<Room>)> {
+        match self.read(samples)? {
+            Some(scene) => Ok((scene, None)),
+            None => {
+                let room = rooms.room(seed)?;
+                Ok((room.scene.clone(), Some(room)))
+            }
+        }
+    }
+}
+
+/// Generated rooms: the generator's boxes, or Sweet Home 3D's models.
+pub struct RoomMaker {
+    catalogue: Option<Catalogue>,
+    config: RoomConfig,
+}
+
+impl RoomMaker {
+    /// Room `seed`.
+    ///
+    /// # Errors
+    /// Errors of the generator (a config it cannot lay out).
+    pub fn room(&self, seed: u64) -> Result<Room> {
+        Ok(match &self.catalogue {
+            Some(c) => catalogue_room(c, &RoomConfig::catalogue(), seed)?,
+            None => generate_room(&self.config, seed)?,
+        })
+    }
+
+    /// Whether the rooms are furnished from the catalogue.
+    pub fn furnished(&self) -> bool {
+        self.catalogue.is_some()
+    }
+}

@@ -1,0 +1,194 @@
+//! The accessible region of a scene: torso samples kept by the torso filter
+//! ([`envfield_affordance::afford`]: a clear torso sphere, some supported and plausible pose,
+//! settling onto a seat), voxelised into one connected set.
+//!
+//! The build, step by step (`build`): a lattice over the scene and the samples; each kept
+//! sample's voxel; the gaps between them closed through face neighbours whose centres pass
+//! the filter too, so the region does not spill over a table's edge; the sit-downs that join
+//! a seat's voxels to the floor's ([`SitDown`], every pose valid and plausible); the largest
+//! 26-connected set. [`crate::quality`] judges the result.
+
+mod bridges;
+mod build;
+mod config;
+mod write;
+
+pub use bridges::SitDown;
+pub use config::RegionConfig;
+
+use crate::{Result, RoomsError};
+use envfield_affordance::{afford_all, Afford};
+use envfield_eikonal::FreeCells3;
+use envfield_grid::{Cell3, Grid3};
+use envfield_scene::nalgebra::Point3;
+use envfield_scene::{Scene, VoxelFrame};
+
+/// The accessible region of a scene: the voxels holding kept torso samples (and their six
+/// neighbours, closing the gaps between samples), reduced to its largest 26-connected set.
+#[derive(Clone, Debug)]
+pub struct AccessibleRegion {
+    /// The voxel lattice, metres.
+    pub frame: VoxelFrame,
+    /// Free voxels are accessible.
+    pub grid: Grid3,
+    /// The kept samples, metres.
+    pub samples: Vec<[f32; 3]>,
+    /// Connected sets before the largest was kept.
+    pub components: usize,
+    /// The sit-downs that joined seats to the floor's set ([`AccessibleRegion::from_kept`]),
+    /// each ending seated in the region.
+    pub sit_downs: Vec<SitDown>,
+    /// The accessible voxels' indices, made on first use.
+    free: std::sync::OnceLock<Vec<usize>>,
+    /// The accessible voxels numbered and linked for fast marching, made on first use.
+    cells: std::sync::OnceLock<std::sync::Arc<FreeCells3>>,
+}
+
+impl AccessibleRegion {
+    /// A region from its parts: `grid`'s free voxels on `frame` are accessible.
+    ///
+    /// # Errors
+    /// [`RoomsError::InvalidInput`] when the grid's shape is not the frame's or no voxel is
+    /// free.
+    pub fn new(
+        frame: VoxelFrame,
+        grid: Grid3,
+        samples: Vec<[f32; 3]>,
+        components: usize,
+    ) -> Result<Self> {
+        if grid.shape() != frame.shape {
+            return Err(RoomsError::InvalidInput(format!(
+                "a region's grid {:?} must have its frame's shape {:?}",
+                grid.shape(),
+                frame.shape
+            )));
+        }
+        if grid.free_count() == 0 {
+            return Err(RoomsError::InvalidInput(
+                "a region needs an accessible voxel".into(),
+            ));
+        }
+        Ok(Self {
+            frame,
+            grid,
+            samples,
+            components,
+            sit_downs: Vec::new(),
+            free: std::sync::OnceLock::new(),
+            cells: std::sync::OnceLock::new(),
+        })
+    }
+
+    /// The accessible voxels numbered in C order and linked to their neighbours, made once
+    /// (on first use) and shared by every field of the region: fast marching over them
+    /// ([`FastMarching::solve3_free`](envfield_eikonal::FastMarching::solve3_free)) costs
+    /// the voxels it reaches, not the region's box, and a [`crate::VoxelField3`] keeps a
+    /// value per accessible voxel alone.
+    ///
+    /// # Errors
+    /// [`RoomsError::Eikonal`] for a lattice too large to march.
+    pub fn free_cells(&self) -> Result<std::sync::Arc<FreeCells3>> {
+        if let Some(cells) = self.cells.get() {
+            return Ok(cells.clone());
+        }
+        let cells = std::sync::Arc::new(FreeCells3::new(&self.grid)?);
+        Ok(self.cells.get_or_init(|| cells).clone())
+    }
+
+    /// The accessible voxels' indices (C order).
+    pub fn free_indices(&self) -> &[usize] {
+        self.free.get_or_init(|| {
+            (0..self.grid.len())
+                .filter(|&i| !self.grid.obstacles()[i])
+                .collect()
+        })
+    }
+
+    /// The region of drawn torso `samples` in `scene`: the torso filter ([`afford_all`], keeping
+    /// what [`Afford::kept`] keeps), then [`AccessibleRegion::from_samples`] at the config's
+    /// voxel.
+    ///
+    /// # Errors
+    /// As [`afford_all`] and [`AccessibleRegion::from_samples`].
+    pub fn from_drawn(scene: &Scene, samples: &[[f32; 3]], config: &RegionConfig) -> Result<Self> {
+        config.validate()?;
+        let kept = afford_all(scene, samples, &config.filter)?
+            .iter()
+            .filter(|a| a.kept())
+            .map(|a| a.at)
+            .collect();
+        Self::from_kept(scene, kept, config)
+    }
+
+    /// The region of `kept` samples (already filtered by `config`'s filter): as
+    /// [`AccessibleRegion::from_samples`], except that with [`RegionConfig::plausible`] a
+    /// neighbouring voxel joins only if a torso at its centre passes the filter too, so the
+    /// gaps between samples close without the region spilling over a table's edge, and a set
+    /// of voxels apart from the largest joins it through a sit-down that ends in it (every
+    /// pose of it valid and plausible): a seat's voxels lie half a metre below the floor's.
+    ///
+    /// # Errors
+    /// As [`afford_all`] and [`AccessibleRegion::from_samples`].
+    pub fn from_kept(scene: &Scene, kept: Vec<[f32; 3]>, config: &RegionConfig) -> Result<Self> {
+        config.validate()?;
+        if !config.filter.plausible {
+            return Self::from_samples(scene, kept, config.voxel);
+        }
+        let in_place = config.in_place();
+        build::build(
+            scene,
+            kept,
+            config.voxel,
+            |centres| {
+                Ok(afford_all(scene, centres, &in_place.filter)?
+                    .iter()
+                    .map(Afford::kept)
+                    .collect())
+            },
+            |frame, all, kept| bridges::sit_down_bridges(scene, frame, all, kept, config),
+        )
+    }
+
+    /// The region of `kept` samples (already filtered) on a lattice covering `scene`.
+    ///
+    /// # Errors
+    /// [`RoomsError::InvalidInput`] for no samples (a scene with no floor keeps none) or an
+    /// empty scene.
+    pub fn from_samples(scene: &Scene, kept: Vec<[f32; 3]>, voxel: f32) -> Result<Self> {
+        build::build(
+            scene,
+            kept,
+            voxel,
+            |centres| Ok(vec![true; centres.len()]),
+            |_, _, _| Ok(Vec::new()),
+        )
+    }
+
+    /// Whether `p` (metres) lies in an accessible voxel.
+    pub fn contains(&self, p: [f32; 3]) -> bool {
+        self.frame
+            .cell_of(&Point3::from(p))
+            .is_some_and(|c| self.grid.is_free(c))
+    }
+
+    /// The accessible voxels' centres, metres.
+    pub fn voxel_centres(&self) -> Vec<[f32; 3]> {
+        self.free_indices()
+            .iter()
+            .map(|&i| self.frame.center(self.grid.cell(i)).into())
+            .collect()
+    }
+
+    /// The voxel of `p` when it is accessible.
+    ///
+    /// # Errors
+    /// [`RoomsError::InvalidInput`] naming `what` for a point outside the region.
+    pub fn cell(&self, p: [f32; 3], what: &str) -> Result<Cell3> {
+        match self.frame.cell_of(&Point3::from(p)) {
+            Some(c) if self.grid.is_free(c) => Ok(c),
+            _ => Err(RoomsError::InvalidInput(format!(
+                "{what} {p:?} is outside the accessible region"
+            ))),
+        }
+    }
+}
