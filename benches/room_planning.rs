@@ -28,8 +28,8 @@ use envfield::eikonal::{FastMarching, Order};
 use envfield::grid::{Cell3, ContinuousField3};
 use envfield::nets::FieldNet;
 use envfield::rooms::harness::{
-    learned_table, pairs, FloorPlanner, Pair, PairOptions, PairSetup, PlannerKind,
-    RoomContext, RunSettings, EXACT_BAND,
+    learned_table, pairs, FloorPlanner, Pair, PairOptions, PairSetup, PlannerKind, RoomContext,
+    RunSettings, EXACT_BAND,
 };
 use envfield::rooms::nav::{BENEATH_CELL, DISTANCE_CELL};
 use envfield::rooms::{

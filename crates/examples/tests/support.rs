@@ -40,7 +40,8 @@ fn the_navigation_mesh_goes_round_a_wall_and_not_through_it() {
         .expect("a path round the wall");
     assert_eq!(path.first(), Some(&start));
     assert_eq!(path.last(), Some(&goal));
-    // Round the wall's end at y = 3 (plus the body's radius): well over the 4 m straight line.
+    // Round the wall's end at y = 3 (plus the body's radius): from (1, 1) up past (3, 3) and
+    // down to (5, 1) is 5.7 m at least, where the straight line through the wall is 4 m.
     let length: f32 = path
         .windows(2)
         .map(|w| {
@@ -50,7 +51,7 @@ fn the_navigation_mesh_goes_round_a_wall_and_not_through_it() {
                 .sqrt()
         })
         .sum();
-    assert!(length > 7.0, "{length} m: {path:?}");
+    assert!(length > 5.6, "{length} m: {path:?}");
     assert!(path.iter().any(|p| p[1] > 3.0), "{path:?}");
 }
 

@@ -550,7 +550,11 @@ fn the_seat_grid_finds_a_place_on_every_seat() {
             assert!(a.kept() && a.valid == Some(*kind), "{t:?}: {a:?}");
         }
         for s in envfield_rooms::torsos::seat_torsos(&room).unwrap() {
-            if afford(&room.scene, s, &config.filter).unwrap().valid.is_none() {
+            if afford(&room.scene, s, &config.filter)
+                .unwrap()
+                .valid
+                .is_none()
+            {
                 continue;
             }
             let near = grid.iter().map(|(t, _)| {

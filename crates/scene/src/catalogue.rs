@@ -23,8 +23,8 @@ use envfield_grid::SplitMix64;
 use nalgebra::{Point3, Vector3};
 
 use crate::error::{Result, SceneError};
+use crate::object::{ObjectKind, Part, SceneObject};
 use crate::room::{at, furnish, kind_at, kind_order, Piece, Pieces, Room, RoomConfig};
-use crate::scene::{ObjectKind, Part, SceneObject};
 use crate::TriangleMesh;
 
 /// Where [`Catalogue::find`] looks when `ENVFIELD_SWEETHOME3D` is not set, relative to the

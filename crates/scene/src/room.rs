@@ -9,7 +9,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Result, SceneError};
 use crate::floor::{floor_map, FloorMapConfig};
-use crate::scene::{ObjectKind, Primitive, Scene, SceneObject};
+use crate::object::{ObjectKind, Primitive, SceneObject};
+use crate::scene::Scene;
 
 /// What [`generate_room`] builds. Sizes are in metres; ranges are `[min, max]`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -305,7 +306,7 @@ pub(crate) fn furnish(config: &RoomConfig, seed: u64, pieces: &mut dyn Pieces) -
                 2 => (at(-t / 2.0, mid, h / 2.0, 0.0), [t, len, h]),
                 _ => (at(w + t / 2.0, mid, h / 2.0, 0.0), [t, len, h]),
             };
-            wall_object.push(crate::scene::Part::primitive(
+            wall_object.push(crate::object::Part::primitive(
                 Primitive::cuboid(size),
                 pose,
             )?);
