@@ -19,19 +19,15 @@ use anyhow::{bail, Context, Result};
 use clap::Parser;
 use envfield::affordance::afford_all;
 use envfield::rooms::pictures::write_field_view;
-use envfield::rooms::quality::{
-    judge_region, region_quality, summarise_drawn, uniform_in_room, RegionQuality,
-};
-use envfield::rooms::sampling::{check_sample_density, middle_goal};
+use envfield::rooms::quality::{judge_region, summarise_drawn, uniform_in_room, HeldOut};
+use envfield::rooms::sampling::middle_goal;
 use envfield::rooms::{
-    draw_torsos, train_field3, AccessibleRegion, ExactField3, Field3Config, Field3Report,
-    LearnedField3, RegionConfig,
+    draw_torsos, train_field3, AccessibleRegion, ExactField3, Field3Config, LearnedField3,
+    RegionConfig,
 };
-use envfield::scene::{
-    catalogue_room, generate_room, read_scene, Catalogue, ImportConfig, Room, RoomConfig, Scene,
-    Units, UpAxis,
-};
+use envfield::scene::{RoomConfig, Scene};
 use envfield::vae::{Cvae, Gate, SampleOptions};
+use envfield_examples::SceneArgs;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -42,16 +38,8 @@ static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 #[derive(Parser)]
 #[command(about = "The accessible region of a room and the 3D fields over it")]
 struct Args {
-    /// A scene to read instead of a generated room: a triangle mesh as OBJ or PLY (metres,
-    /// z up).
-    #[arg(long)]
-    scene: Option<PathBuf>,
-    /// The scene file's up axis: z, or y (glTF, game levels).
-    #[arg(long, default_value = "z")]
-    up: UpAxis,
-    /// The scene file's units: m, cm, mm, or metres per unit.
-    #[arg(long, default_value = "m")]
-    units: Units,
+    #[command(flatten)]
+    scene: SceneArgs,
     /// Seed of the generated room (10000 and up were never trained on).
     #[arg(long, default_value_t = 10_000)]
     seed: u64,
@@ -67,10 +55,6 @@ struct Args {
     /// Evaluate this many held-out generated rooms instead of drawing one.
     #[arg(long)]
     rooms: Option<u64>,
-    /// Furnish the rooms with Sweet Home 3D's furniture models (fetched by
-    /// scripts/fetch_sweethome3d.sh) instead of the generator's boxes.
-    #[arg(long)]
-    catalogue: bool,
     /// Train and measure the learned field on the first this many rooms of --rooms.
     #[arg(long, default_value_t = 5)]
     field_rooms: u64,
@@ -114,34 +98,12 @@ struct Args {
     json: bool,
 }
 
-/// The rooms of seed `seed`: the generator's, or furnished from the catalogue.
-struct Rooms(Option<Catalogue>);
-
-impl Rooms {
-    fn new(args: &Args) -> Result<Self> {
-        if !args.catalogue {
-            return Ok(Self(None));
-        }
-        let dir = Catalogue::find()
-            .context("no Sweet Home 3D catalogue: run scripts/fetch_sweethome3d.sh")?;
-        Ok(Self(Some(Catalogue::read(&dir).with_context(|| {
-            format!("reading the catalogue at {}", dir.display())
-        })?)))
-    }
-
-    fn room(&self, seed: u64) -> Result<Room> {
-        Ok(match &self.0 {
-            Some(c) => catalogue_room(c, &RoomConfig::catalogue(), seed)?,
-            None => generate_room(&RoomConfig::default(), seed)?,
-        })
-    }
-
-    fn name(&self) -> &'static str {
-        if self.0.is_some() {
-            "real-furniture room"
-        } else {
-            "generated room"
-        }
+/// What the rooms are, for the summary.
+fn furniture(args: &Args) -> &'static str {
+    if args.scene.catalogue {
+        "real-furniture room"
+    } else {
+        "generated room"
     }
 }
 
@@ -194,20 +156,8 @@ fn one(args: &Args, vae: &Cvae) -> Result<()> {
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
     envfield::grid::check_writable(args.out.join("summary.json"))?;
-    let (scene, room): (Scene, Option<Room>) = match &args.scene {
-        Some(f) => {
-            let (scene, report) = read_scene(f, &ImportConfig::new(args.up, args.units))?;
-            eprintln!("{}: {report}", f.display());
-            if let Some(w) = check_sample_density(&scene, args.samples)? {
-                eprintln!("warning: {w}");
-            }
-            (scene, None)
-        }
-        None => {
-            let room = Rooms::new(args)?.room(args.seed)?;
-            (room.scene.clone(), Some(room))
-        }
-    };
+    let rooms = args.scene.rooms(RoomConfig::default())?;
+    let (scene, room) = args.scene.scene(&rooms, args.seed, Some(args.samples))?;
     scene.to_mesh().write(args.out.join("scene.obj"))?;
     let t = Instant::now();
     let anchors = anchor_vae(args)?;
@@ -220,9 +170,7 @@ fn one(args: &Args, vae: &Cvae) -> Result<()> {
     let kept = affords.iter().filter(|a| a.kept()).map(|a| a.at).collect();
     let region = AccessibleRegion::from_kept(&scene, kept, &config)?;
     let region_ms = t.elapsed().as_secs_f64() * 1e3;
-    region.write_samples_ply(args.out.join("samples.ply"))?;
-    region.write_ply(args.out.join("region.ply"))?;
-    region.write_png(args.out.join("region.png"), 6)?;
+    region.write_files(&args.out)?;
     let goal = middle_goal(&region);
     let exact = ExactField3::new(&region, goal)?;
     write_field_view(&region, &exact, args.out.join("field_exact.png"))?;
@@ -245,7 +193,7 @@ fn one(args: &Args, vae: &Cvae) -> Result<()> {
     let summary = serde_json::json!({
         "affords_clear_supported_valid": drawn["affords_clear_supported_valid"],
         "drawn_by_height_m": drawn["drawn_by_height_m"],
-        "scene": args.scene.as_ref().map(|p| p.display().to_string()).unwrap_or(format!("{} {}", Rooms::new(args)?.name(), args.seed)),
+        "scene": args.scene.scene.as_ref().map(|p| p.display().to_string()).unwrap_or(format!("{} {}", furniture(args), args.seed)),
         "samples": samples.len(),
         "kept": region.samples.len(),
         "accessible_voxels": region.grid.free_count(),
@@ -271,61 +219,31 @@ fn many(args: &Args, vae: &Cvae, rooms: u64) -> Result<()> {
     let config = region_config(args);
     let untrained = Cvae::new(vae.config().clone(), 1)?;
     let anchors = anchor_vae(args)?;
-    let (mut ours, mut random, mut uniform) = (Vec::new(), Vec::new(), Vec::new());
-    let mut fields = Vec::new();
+    let mut held_out = HeldOut::default();
     let bar = progress(rooms, "held-out rooms")?;
-    let makes = Rooms::new(args)?;
+    let makes = args.scene.rooms(RoomConfig::default())?;
     for k in 0..rooms {
         let seed = 10_000 + k;
         let room = makes.room(seed)?;
-        let samples = draw(args, vae, anchors.as_ref(), &room.scene, seed, false)?;
-        // The filter once for ours: its quality and its field read the same region.
-        let affords = afford_all(&room.scene, &samples, &config.filter)?;
-        let kept: Vec<[f32; 3]> = affords.iter().filter(|a| a.kept()).map(|a| a.at).collect();
-        let region = (!kept.is_empty())
-            .then(|| AccessibleRegion::from_kept(&room.scene, kept, &config))
-            .transpose()?;
-        ours.push(judge_region(&room, &affords, region.as_ref())?);
-        random.push(region_quality(
-            &room,
-            // An untrained gate may pass no anchor at all: the twin decodes every one.
-            &draw(args, &untrained, anchors.as_ref(), &room.scene, seed, true)?,
-            &config,
-        )?);
-        let box_samples = uniform_in_room(&room, 2.5, args.samples, seed);
-        uniform.push(region_quality(&room, &box_samples, &config)?);
+        let drawn = draw(args, vae, anchors.as_ref(), &room.scene, seed, false)?;
+        // An untrained gate may pass no anchor at all: the twin decodes every one.
+        let twin = draw(args, &untrained, anchors.as_ref(), &room.scene, seed, true)?;
+        let uniform = uniform_in_room(&room, 2.5, args.samples, seed);
+        let region = held_out.add(&room, &drawn, &twin, &uniform, &config)?;
         if !args.no_field && k < args.field_rooms {
             let region = region.with_context(|| format!("room {seed}: no sample kept"))?;
             let cfg = field_config(args, seed);
             let (_, report) = train_field3(&region, &cfg, None, |_, _, _| {})?;
             eprintln!("room {seed}: learned field {report:?}");
-            fields.push(report);
+            held_out.add_field(report);
         }
         bar.inc(1);
     }
     bar.finish_and_clear();
-    let per_room: Vec<_> = ours
-        .iter()
-        .enumerate()
-        .map(|(k, q)| serde_json::json!({"seed": 10_000 + k as u64, "quality": q}))
-        .collect();
-    let mut line = serde_json::json!({
-        "rooms": rooms,
-        "furniture": makes.name(),
-        "samples_per_room": args.samples,
-        "untrained_vae": RegionQuality::mean_json(&random),
-        "uniform_box": RegionQuality::mean_json(&uniform),
-        "per_room": per_room,
-    });
-    let parts = [
-        RegionQuality::summary_json(&ours),
-        Field3Report::summary_json(&fields),
-    ];
-    for part in parts.iter().filter_map(|p| p.as_object()) {
-        for (k, v) in part {
-            line[k] = v.clone();
-        }
-    }
+    let mut line = held_out.summary_json(10_000);
+    line["rooms"] = rooms.into();
+    line["furniture"] = furniture(args).into();
+    line["samples_per_room"] = args.samples.into();
     if !args.json {
         eprintln!("{}", serde_json::to_string_pretty(&line)?);
     }

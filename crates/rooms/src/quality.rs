@@ -3,8 +3,9 @@
 //! ([`implausible`]). The `accessible` example's held-out protocol reports these.
 
 use crate::torsos::seat_torsos;
-use crate::{AccessibleRegion, RegionConfig, Result, RoomsError};
+use crate::{AccessibleRegion, Field3Report, RegionConfig, Result, RoomsError};
 use envfield_affordance::{afford_all, Afford};
+use envfield_grid::Point3m;
 use envfield_scene::nalgebra::{Point3, Vector3};
 use envfield_scene::{ObjectKind, Room, Scene};
 use rayon::prelude::*;
@@ -277,4 +278,81 @@ pub fn uniform_in_room(room: &Room, height: f32, n: usize, seed: u64) -> Vec<[f3
             ]
         })
         .collect()
+}
+
+/// The held-out protocol of the region table (the `accessible` example's `--rooms`): each
+/// room judged three ways on the same furniture, ours (the trained VAE's samples), its
+/// untrained twin's samples and uniform samples in the room's box (the controls), with the
+/// learned field's report on the first rooms. Rooms are added in order of seed.
+#[derive(Clone, Debug, Default)]
+pub struct HeldOut {
+    /// Ours, a room each.
+    pub ours: Vec<RegionQuality>,
+    /// The untrained twin's samples.
+    pub untrained: Vec<RegionQuality>,
+    /// Uniform samples in the room's box.
+    pub uniform: Vec<RegionQuality>,
+    /// The learned field's reports ([`HeldOut::add_field`]).
+    pub fields: Vec<Field3Report>,
+}
+
+impl HeldOut {
+    /// Judges `room`: ours from `drawn` (filtered once; the region and its quality read the
+    /// same answers), the controls from `twin` and `uniform` ([`uniform_in_room`]). Returns
+    /// ours' region (`None` when no sample is kept), for a learned field to be trained on.
+    ///
+    /// # Errors
+    /// As [`region_quality`].
+    pub fn add(
+        &mut self,
+        room: &Room,
+        drawn: &[Point3m],
+        twin: &[Point3m],
+        uniform: &[Point3m],
+        config: &RegionConfig,
+    ) -> Result<Option<AccessibleRegion>> {
+        let affords = afford_all(&room.scene, drawn, &config.filter)?;
+        let kept: Vec<Point3m> = affords.iter().filter(|a| a.kept()).map(|a| a.at).collect();
+        let region = (!kept.is_empty())
+            .then(|| AccessibleRegion::from_kept(&room.scene, kept, config))
+            .transpose()?;
+        self.ours
+            .push(judge_region(room, &affords, region.as_ref())?);
+        self.untrained.push(region_quality(room, twin, config)?);
+        self.uniform.push(region_quality(room, uniform, config)?);
+        Ok(region)
+    }
+
+    /// Adds a room's learned-field report.
+    pub fn add_field(&mut self, report: Field3Report) {
+        self.fields.push(report);
+    }
+
+    /// The table's line: ours' means, least coverage and most implausibility
+    /// ([`RegionQuality::summary_json`]), the controls' means (`untrained_vae`,
+    /// `uniform_box`), ours per room (seeds from `first_seed`), and the learned fields'
+    /// summary ([`Field3Report::summary_json`]).
+    pub fn summary_json(&self, first_seed: u64) -> serde_json::Value {
+        let per_room: Vec<_> = self
+            .ours
+            .iter()
+            .zip(first_seed..)
+            .map(|(q, seed)| serde_json::json!({"seed": seed, "quality": q}))
+            .collect();
+        let mut line = serde_json::json!({
+            "untrained_vae": RegionQuality::mean_json(&self.untrained),
+            "uniform_box": RegionQuality::mean_json(&self.uniform),
+            "per_room": per_room,
+        });
+        let parts = [
+            RegionQuality::summary_json(&self.ours),
+            Field3Report::summary_json(&self.fields),
+        ];
+        for part in parts.iter().filter_map(|p| p.as_object()) {
+            for (k, v) in part {
+                line[k] = v.clone();
+            }
+        }
+        line
+    }
 }

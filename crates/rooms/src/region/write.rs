@@ -7,6 +7,18 @@ use envfield_scene::nalgebra::Point3;
 use std::path::Path;
 
 impl AccessibleRegion {
+    /// Writes the region's files into `dir`: `samples.ply` (the kept samples), `region.ply`
+    /// (the accessible voxels coloured by height) and `region.png` (from above, 6 pixels a
+    /// voxel), each atomically.
+    ///
+    /// # Errors
+    /// I/O errors, naming the file.
+    pub fn write_files(&self, dir: &Path) -> Result<()> {
+        self.write_samples_ply(dir.join("samples.ply"))?;
+        self.write_ply(dir.join("region.ply"))?;
+        self.write_png(dir.join("region.png"), 6)
+    }
+
     /// Writes the kept samples as a PLY point cloud, atomically.
     ///
     /// # Errors
