@@ -13,7 +13,7 @@
 //! arity by grid size: 2 on small grids, where it runs fewer instructions than 4 or 8; 4 on
 //! large ones, where a pop is a chain of dependent loads and cache misses (one per level, each
 //! moving an entry and rewriting its cell's record), so half the levels beat fewer
-//! comparisons. The measurements are in `docs/performance.md`.
+//! comparisons. The measurements are in `docs/notes/performance-history.md`.
 
 /// Per-cell record of the marcher: the accepted value (infinity until accepted) and a tag
 /// that is the cell's heap position while it is queued, or one of [`FAR`], [`BLOCKED`],

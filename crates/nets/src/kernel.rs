@@ -9,7 +9,7 @@
 //! fused multiply-adds per input value. On x86-64 it is compiled again for AVX2 with FMA and
 //! for AVX-512, and the widest the CPU has is picked at run time; elsewhere the portable build
 //! runs (the compiler vectorises it for the baseline target). What it gained is measured in
-//! `docs/performance.md`.
+//! `docs/notes/performance-history.md`.
 
 /// One convolution's shape: a channels-last input (H, W, C), 3x3 taps `dilation` apart with
 /// zero padding of `dilation`, and `stride`; output (Ho, Wo, Co) with Ho = (H - 1) / stride + 1.

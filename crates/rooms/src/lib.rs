@@ -1,41 +1,52 @@
 //! People in furnished rooms (paper sections 4.1 and 4.2): where a person can be, how far
 //! every place is from a goal, and how a body walks, sits and lies there.
 //!
-//! - Training data for the VAE ([`room_torsos`]): torso locations of valid poses along walks
-//!   on exact floor paths, sitting down on every seat, lying down on beds and sofas, and
-//!   every supported, collision-free standing pose on a floor grid (the paper's
-//!   augmentation), as the [`RoomTorsos`](envfield_vae::RoomTorsos) envfield-vae trains on.
-//! - [`AccessibleRegion`]: torso samples kept by what a torso can afford (see [`region`]),
-//!   voxelised into one connected set, written as PLY and PNG; [`region_quality`] judges a
-//!   set of samples by the share that affords a pose and by floor and seat coverage.
-//! - [`ExactField3`] (fast marching over the accessible voxels, metres) and
-//!   [`LearnedField3`] (the goal-conditioned network of envfield-nets, trained per scene by
-//!   [`train_field3`]) are both [`ContinuousField3`](envfield_grid::ContinuousField3)s, so a
-//!   planner treats them alike. Either becomes a [`VoxelField3`] once per goal (the fast
-//!   marching is one already; [`LearnedField3::tabulate`] is one batched network pass), so a
-//!   search step reads it by interpolation.
-//! - [`PoseFilter`] and the region as envfield-plan's [`StepFilter`](envfield_plan::space3::StepFilter)
-//!   and [`Space3`](envfield_plan::space3::Space3): what the 3D planners may step to.
-//! - [`harness`]: the room tables (paper Tables 3 and 4): planners by name
-//!   ([`PlannerKind`](harness::PlannerKind)), walking and sit-down pairs, one run of every
-//!   planner with its poses fitted and checked; [`tables`] sums them up; [`pictures`] draws
-//!   them.
-//! - [`birdseye`]: several people on one floor (section 4.1): floor maps, the bird's-eye
-//!   field's training maps, the crowd table's tallies and the frames of a run.
+//! Three ways in, from the least to the most:
 //!
-//! ```no_run
-//! use envfield_rooms::{AccessibleRegion, ExactField3, RegionConfig};
-//! use envfield_grid::ContinuousField3;
+//! 1. **A field.** [`AccessibleRegion`] is where a torso can be: samples (a VAE's through
+//!    [`sample_region`] and [`draw_torsos`], a level's own surfaces through
+//!    [`standing_torsos`], or any you have) kept by the torso filter of
+//!    [`envfield_affordance::afford`], voxelised into one connected set with the sit-downs
+//!    that join its seats. [`ExactField3`] (fast marching over its voxels, metres) and
+//!    [`LearnedField3`] (the goal-conditioned network, trained per scene by [`train_field3`],
+//!    kept on disk by [`FieldStore`]) are both
+//!    [`ContinuousField3`](envfield_grid::ContinuousField3)s; either becomes a
+//!    [`VoxelField3`] once per goal.
+//! 2. **A 2D path.** [`birdseye`]: several people on one floor, the bird's-eye field's
+//!    training maps and the crowd table's tallies (the planners themselves are
+//!    `envfield_plan`'s).
+//! 3. **A region and a 3D path.** [`harness`]: pairs of a start and a goal with the pose
+//!    sequence a body follows ([`harness::pairs`]), and every planner on them with its poses
+//!    fitted and checked ([`harness::run_pair`]): ours (the pose-dependent search on either
+//!    field, under [`PoseFilter`]), RRT, RRT*, PRM, the line, a navigation mesh.
+//!
+//! The rest: [`quality`] (how good a region is, the held-out protocol), [`torsos`] (the VAE's
+//! training data), [`sampling`] (VAE samples and their density), [`nav`] (the filters and the
+//! scene's tables), [`tables`] and [`pictures`] (the room tables and their pictures).
+//!
+//! A standing body's walk across a generated room, on the exact field, every pose checked:
+//!
+//! ```
+//! use envfield_rooms::harness::{pairs, run_pair, PairOptions, PlannerKind, RoomContext};
+//! use envfield_rooms::{standing_torsos, AccessibleRegion, RegionConfig};
 //! use envfield_scene::{generate_room, RoomConfig};
 //!
 //! let room = generate_room(&RoomConfig::default(), 3)?;
-//! // Torso samples from anywhere (a VAE's, or a grid of your own), kept by the filter.
-//! let samples: Vec<[f32; 3]> = (0..40)
-//!     .flat_map(|i| (0..30).map(move |j| [0.1 + 0.1 * i as f32, 0.1 + 0.1 * j as f32, 0.93]))
-//!     .collect();
-//! let region = AccessibleRegion::from_drawn(&room.scene, &samples, &RegionConfig::default())?;
-//! let field = ExactField3::new(&region, region.samples[0])?;
-//! println!("{:.2} m", field.value(region.samples[1])?);
+//! // A standing torso over every floor column 0.2 m apart, kept by the torso filter.
+//! let config = RegionConfig { voxel: 0.2, ..RegionConfig::default() };
+//! let torsos = standing_torsos(&room.scene, config.voxel)?;
+//! let region = AccessibleRegion::from_drawn(&room.scene, &torsos, &config.in_place())?;
+//! let options = PairOptions { walks: 1, min_distance: 2.0, sit_downs: false, ..PairOptions::default() };
+//! let pair = &pairs(None, &room.scene, &region, &options)?[0];
+//! let runs = run_pair(
+//!     &RoomContext::bare(&room.scene, &region),
+//!     pair,
+//!     &[PlannerKind::OursExact],
+//!     &Default::default(),
+//! )?;
+//! let ours = &runs[0].outcome;
+//! assert!(ours.reached && ours.path_ratio < 1.5);
+//! println!("{} steps, {:.0}% of the poses valid", runs[0].path.len(), ours.poses.valid);
 //! # Ok::<(), envfield_rooms::RoomsError>(())
 //! ```
 

@@ -172,7 +172,7 @@ impl<const N: usize, const ARITY: usize, L: Links<N>> Marcher<N, ARITY, L> {
     /// `c`'s cache lines) while the current cell's neighbours are updated. `c` is the heap's
     /// next cell, so its records are usually in the cache by the time it is accepted: the
     /// front visits cells in order of value, not of address, and on large grids it outgrows
-    /// the L2 cache (the gain is measured in `docs/performance.md`).
+    /// the L2 cache (the gain is measured in `docs/notes/performance-history.md`).
     #[inline(always)]
     pub(super) fn prefetch_around(&self, c: usize, strides: [usize; N]) {
         #[cfg(target_arch = "x86_64")]

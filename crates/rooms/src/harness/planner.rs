@@ -326,7 +326,7 @@ impl<'a> PairSetup<'a> {
 /// within two steps of it ([`FieldSearch3::near_stall`]), before ours falls back to the region
 /// alone: a goal a body fits only at a few frames and headings is come close to early, and
 /// the search would otherwise spend its whole budget on the rest of the room. Set above the
-/// longest such run of any strict search that went on to land (`docs/performance.md`), so it
+/// longest such run of any strict search that went on to land (`docs/notes/performance-history.md`), so it
 /// ends only searches that would have failed.
 pub const NEAR_STALL: usize = 2500;
 
@@ -338,7 +338,7 @@ pub const EXACT_BAND: f32 = 1.0;
 /// How far from its goal ours' learned table is pinned to it, metres
 /// ([`VoxelField3::pinned`]): about the reach of a sit-down, whose
 /// seated goal is where a room's network reads worst (the measurements, with and without it,
-/// are in `docs/rooms.md`).
+/// are in `docs/notes/rooms-history.md`).
 pub const PIN_RADIUS: f32 = 0.5;
 
 /// Ours' table of the learned field for its goal: one batched pass over the region
