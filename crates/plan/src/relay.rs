@@ -73,7 +73,6 @@ impl<M: FieldModel> RelayDescent<M> {
     /// Plans from `from` to `to` on `to_field` (the field towards `to`), splitting a failing
     /// walk at a relay cell while `depth` allows. `from_field` holds the field towards `from`
     /// once predicted: the two legs of a relay start from the same cell and share it.
-    #[allow(clippy::too_many_arguments)]
     fn leg(
         &self,
         grid: &Grid2,
@@ -81,8 +80,7 @@ impl<M: FieldModel> RelayDescent<M> {
         to: Cell2,
         to_field: &Field2,
         from_field: &mut Option<Field2>,
-        depth: usize,
-        max_steps: usize,
+        Limits { depth, max_steps }: Limits,
     ) -> Result<PlanOutcome> {
         let walk = descend(grid, to_field, self.rule, from, to, max_steps);
         if walk.success || depth == 0 {
@@ -127,8 +125,10 @@ impl<M: FieldModel> RelayDescent<M> {
             from,
             from_field,
             &mut relay_field,
-            depth - 1,
-            max_steps,
+            Limits {
+                depth: depth - 1,
+                max_steps,
+            },
         )?;
         let forth = self.leg(
             grid,
@@ -136,8 +136,10 @@ impl<M: FieldModel> RelayDescent<M> {
             to,
             to_field,
             &mut relay_field,
-            depth - 1,
-            max_steps,
+            Limits {
+                depth: depth - 1,
+                max_steps,
+            },
         )?;
         Ok(match join(&back, &forth, to, max_steps) {
             Some(path) => PlanOutcome {
@@ -239,10 +241,19 @@ impl<M: FieldModel> Planner for RelayDescent<M> {
     ) -> Result<PlanOutcome> {
         check_query(grid, start, goal)?;
         let to_goal = self.predict(grid, goal)?;
-        self.leg(
-            grid, start, goal, &to_goal, &mut None, self.depth, max_steps,
-        )
+        let limits = Limits {
+            depth: self.depth,
+            max_steps,
+        };
+        self.leg(grid, start, goal, &to_goal, &mut None, limits)
     }
+}
+
+/// How far a leg may still split (`depth` relays) and walk (`max_steps`).
+#[derive(Clone, Copy)]
+struct Limits {
+    depth: usize,
+    max_steps: usize,
 }
 
 #[cfg(test)]

@@ -1,7 +1,7 @@
 //! The region of a scene too large to draw: a standing torso over every surface that faces up.
 //!
 //! A region drawn from the VAE needs samples in proportion to the floor's area
-//! ([`SAMPLES_PER_M2`](crate::SAMPLES_PER_M2)); a game level of 75 x 100 m would need a
+//! ([`SAMPLES_PER_M2`](crate::sampling::SAMPLES_PER_M2)); a game level of 75 x 100 m would need a
 //! million. Here the candidates come from the scene's own surfaces instead, as Recast's
 //! heightfield does: rays cast straight down on a lattice of columns find every surface of
 //! each column, floors above floors included, and a standing body's torso is placed over each

@@ -108,7 +108,7 @@ impl Tally {
     /// plausibility ([`PoseShares::judge`](crate::harness::PoseShares::judge)).
     ///
     /// # Errors
-    /// As [`crate::implausible`].
+    /// As [`crate::quality::implausible`].
     pub fn add_in(&mut self, kind: PairKind, runs: &[Run], room: &Room) -> crate::Result<()> {
         let mut judged = Vec::with_capacity(runs.len());
         for r in runs {

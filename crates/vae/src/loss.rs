@@ -18,21 +18,20 @@ pub(crate) struct Loss {
 
 impl Cvae {
     /// The training loss on a batch: `clouds` (B, N, 3) and `torsos` (B * k, 3), normalised,
-    /// with standard-normal noise `eps` (B * k, latent). Reconstruction: squared error over
-    /// `2 sigma^2` (sigma in normalised units), summed over xyz; KL to the standard normal,
+    /// with standard-normal noise `eps` (B * k, latent), weighted by `(kl_weight, sigma)`.
+    /// Reconstruction: squared error over `2 sigma^2` (sigma in normalised units), summed
+    /// over xyz; KL to the standard normal,
     /// summed over the latent; both averaged over the torsos. `gate`, for a gated VAE: more
     /// neighbourhoods (M, N, 3) and their occupancy labels (M,) of 0 or 1, whose logistic
     /// cross-entropy, averaged, joins the total at the gate's weight. `kinds`, for a VAE with
     /// pose kinds: the torsos' (B * k, 3) one-hot kinds; the kind head's cross-entropy joins
     /// the total at the gate's weight.
-    #[allow(clippy::too_many_arguments)]
     pub(crate) fn loss(
         &self,
         clouds: &Tensor,
         torsos: &Tensor,
         eps: &Tensor,
-        kl_weight: f64,
-        sigma: f32,
+        (kl_weight, sigma): (f64, f32),
         gate: Option<(&Tensor, &Tensor)>,
         kinds: Option<&Tensor>,
     ) -> Result<Loss> {

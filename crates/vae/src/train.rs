@@ -306,8 +306,7 @@ impl VaeTrainer {
                 &cloud,
                 &torsos,
                 &eps,
-                kl_weight,
-                sigma,
+                (kl_weight, sigma),
                 gate,
                 kinds.as_ref(),
             )?;

@@ -1,6 +1,6 @@
-//! The room navigation harness (paper Tables 3 and 4): the planners by name ([`planner`]),
-//! the walking and sit-down pairs ([`pairs`]), one run of every planner on a pair with its
-//! poses fitted and checked ([`run`], [`scoring`]). `room_nav`, `level` and the
+//! The room navigation harness (paper Tables 3 and 4): the planners by name
+//! ([`PlannerKind`]), the walking and sit-down pairs ([`pairs()`]), one run of every planner on
+//! a pair with its poses fitted and checked ([`run_pair`], [`fit`]). `room_nav`, `level` and the
 //! `room_planning` bench all run it; [`crate::tables`] sums it up.
 //!
 //! Each planner's work is split as a navigation mesh splits it, and timed so: once per room

@@ -224,7 +224,7 @@ pub enum FieldKind {
     /// ([`LearnedField3::tabulate`]) and pinned to its goal within [`PIN_RADIUS`]
     /// ([`VoxelField3::pinned`]), read by interpolation at every step.
     LearnedTable,
-    /// The exact field ([`ExactField3`]), fast marching once per goal.
+    /// The exact field ([`ExactField3`](crate::ExactField3)), fast marching once per goal.
     Exact,
 }
 
@@ -331,7 +331,7 @@ impl<'a> PairSetup<'a> {
 pub const NEAR_STALL: usize = 2500;
 
 /// How far past a pair's start, and how much longer than the shortest way, ours' exact field
-/// is marched, metres ([`ExactField3::toward`]): room for the search to go round what the
+/// is marched, metres ([`ExactField3::toward`](crate::ExactField3::toward)): room for the search to go round what the
 /// poses refuse, at a fraction of the whole region's march.
 pub const EXACT_BAND: f32 = 1.0;
 

@@ -139,7 +139,7 @@ impl<'a> RoomContext<'a> {
 /// and its per-goal and per-room work apart), its poses fitted and checked against the scene.
 ///
 /// # Errors
-/// [`RoomsError::InvalidInput`] for a start or goal outside the region, or the navigation
+/// [`RoomsError::InvalidInput`](crate::RoomsError::InvalidInput) for a start or goal outside the region, or the navigation
 /// mesh asked for and not given; errors of the planners and fields.
 pub fn run_pair(
     room: &RoomContext,

@@ -162,7 +162,7 @@ pub(super) fn sit_down_bridges(
     Ok(chains.into_iter().flatten().collect())
 }
 
-/// A sit-down the region found ([`AccessibleRegion::sit_downs`]): [`sit_down`] onto a seat of
+/// A sit-down the region found ([`AccessibleRegion::sit_downs`](super::AccessibleRegion::sit_downs)): [`sit_down`] onto a seat of
 /// `seat_height`, turned by `yaw` about the vertical and moved so that it ends seated with
 /// the torso at `seated`; every pose of it valid and plausible where it was found.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]

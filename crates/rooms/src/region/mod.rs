@@ -121,7 +121,7 @@ impl AccessibleRegion {
     }
 
     /// The region of `kept` samples (already filtered by `config`'s filter): as
-    /// [`AccessibleRegion::from_samples`], except that with [`RegionConfig::plausible`] a
+    /// [`AccessibleRegion::from_samples`], except that with [`FilterConfig::plausible`](envfield_affordance::FilterConfig::plausible) a
     /// neighbouring voxel joins only if a torso at its centre passes the filter too, so the
     /// gaps between samples close without the region spilling over a table's edge, and a set
     /// of voxels apart from the largest joins it through a sit-down that ends in it (every
