@@ -27,7 +27,8 @@ use envfield::plan::crowd::{
     orca_crowd, random_trips, shortest_lengths, walk_crowd, CrowdConfig, OrcaConfig,
 };
 use envfield::rooms::birdseye::{crowd_frames, CrowdTally, Floor, RESOLUTION};
-use envfield::scene::{generate_room, read_scene, ImportConfig, RoomConfig, Units, UpAxis};
+use envfield::scene::RoomConfig;
+use envfield_examples::SceneArgs;
 
 #[global_allocator]
 static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
@@ -41,16 +42,8 @@ struct Args {
     /// Seed of the room and of the start/goal pairs.
     #[arg(long, default_value_t = 0)]
     seed: u64,
-    /// A scene to read instead of a generated room: a triangle mesh as OBJ or PLY (metres,
-    /// z up, the floor at its lowest point).
-    #[arg(long)]
-    room: Option<PathBuf>,
-    /// The scene file's up axis: z, or y (glTF, game levels).
-    #[arg(long, default_value = "z")]
-    up: UpAxis,
-    /// The scene file's units: m, cm, mm, or metres per unit.
-    #[arg(long, default_value = "m")]
-    units: Units,
+    #[command(flatten)]
+    scene: SceneArgs,
     /// Run a batch over this many generated rooms (seeds from --seed) and print the figures.
     #[arg(long)]
     rooms: Option<usize>,
@@ -141,8 +134,9 @@ fn batch(args: &Args, rooms: usize, model: &FieldNet, config: &CrowdConfig) -> R
         CrowdTally::default(),
     );
     let gait = walk(&WalkConfig::default(), args.seed)?;
+    let maker = args.scene.rooms(RoomConfig::birdseye())?;
     for room in args.seed..args.seed + rooms as u64 {
-        let scene = generate_room(&RoomConfig::birdseye(), room)?.scene;
+        let scene = maker.room(room)?.scene;
         let floor = Floor::new(scene, args.body_radius)?;
         let trips = random_trips(&floor.walkable, args.people, config, 1.0 / RESOLUTION, room)?;
         let shortest = shortest_lengths(&floor.walkable, &trips)?;
@@ -182,15 +176,8 @@ fn one_room(args: &Args, model: &FieldNet, config: &CrowdConfig) -> Result<()> {
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
     envfield::grid::check_writable(args.out.join("crowd.json"))?;
-    let scene = match &args.room {
-        Some(file) => {
-            let import = ImportConfig::new(args.up, args.units);
-            let (scene, report) = read_scene(file, &import)?;
-            eprintln!("{}: {report}", file.display());
-            scene
-        }
-        None => generate_room(&RoomConfig::birdseye(), args.seed)?.scene,
-    };
+    let rooms = args.scene.rooms(RoomConfig::birdseye())?;
+    let (scene, _) = args.scene.scene(&rooms, args.seed, None)?;
     let floor = Floor::new(scene, args.body_radius)?;
     let trips = random_trips(
         &floor.walkable,

@@ -21,9 +21,10 @@ use envfield::grid::{Cell2, HeatMapStyle, MoveRule};
 use envfield::plan::descend;
 use envfield::scene::nalgebra::{distance, Point3};
 use envfield::scene::{
-    floor_map, generate_room, read_scene, sample_surface, write_point_cloud, write_polyline_obj,
-    FloorMapConfig, ImportConfig, RoomConfig, Scene, Units, UpAxis,
+    floor_map, sample_surface, write_point_cloud, write_polyline_obj, FloorMapConfig, RoomConfig,
+    Scene,
 };
+use envfield_examples::SceneArgs;
 
 #[global_allocator]
 static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
@@ -46,16 +47,8 @@ struct Args {
     /// Surface points to sample.
     #[arg(long, default_value_t = 20_000)]
     points: usize,
-    /// A scene to read instead of a generated room: a triangle mesh as OBJ or PLY (metres,
-    /// z up, the floor at its lowest point).
-    #[arg(long)]
-    scene: Option<PathBuf>,
-    /// The scene file's up axis: z, or y (glTF, game levels).
-    #[arg(long, default_value = "z")]
-    up: UpAxis,
-    /// The scene file's units: m, cm, mm, or metres per unit.
-    #[arg(long, default_value = "m")]
-    units: Units,
+    #[command(flatten)]
+    scene: SceneArgs,
 }
 
 fn main() -> Result<()> {
@@ -65,25 +58,23 @@ fn main() -> Result<()> {
     envfield::grid::check_writable(args.out.join("scene.obj"))?;
     let t = Instant::now();
     // The scene, its size in metres and the kinds of its furniture (none known for a file).
-    let (scene, size, kinds): (Scene, [f32; 2], Vec<String>) = match &args.scene {
-        Some(file) => {
-            let import = ImportConfig::new(args.up, args.units);
-            let (scene, report) = read_scene(file, &import)?;
-            eprintln!("{}: {report}", file.display());
-            let aabb = scene.aabb().context("the scene is empty")?;
-            let extent = aabb.maxs - aabb.mins;
-            (scene, [extent.x, extent.y], Vec::new())
-        }
-        None => {
-            let room = generate_room(&RoomConfig::default(), args.seed)?;
-            let kinds = room
-                .furniture
-                .iter()
-                .map(|f| format!("{:?}", f.kind).to_lowercase())
-                .collect();
-            (room.scene, room.size, kinds)
-        }
-    };
+    let rooms = args.scene.rooms(RoomConfig::default())?;
+    let (scene, size, kinds): (Scene, [f32; 2], Vec<String>) =
+        match args.scene.scene(&rooms, args.seed, None)? {
+            (scene, None) => {
+                let aabb = scene.aabb().context("the scene is empty")?;
+                let extent = aabb.maxs - aabb.mins;
+                (scene, [extent.x, extent.y], Vec::new())
+            }
+            (scene, Some(room)) => {
+                let kinds = room
+                    .furniture
+                    .iter()
+                    .map(|f| format!("{:?}", f.kind).to_lowercase())
+                    .collect();
+                (scene, room.size, kinds)
+            }
+        };
     let generate_ms = t.elapsed().as_secs_f64() * 1e3;
     let mesh = scene.to_mesh();
     mesh.write(args.out.join("scene.obj"))?;

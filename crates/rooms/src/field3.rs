@@ -56,7 +56,7 @@ impl VoxelField3 {
     ///
     /// # Errors
     /// [`RoomsError::InvalidInput`] for a goal outside the accessible region.
-    pub fn new(region: &AccessibleRegion, goal: [f32; 3]) -> Result<Self> {
+    pub fn new(region: &AccessibleRegion, goal: Point3m) -> Result<Self> {
         let cell = region.cell(goal, "goal")?;
         Self::at_cell(region, cell)
     }
@@ -82,7 +82,7 @@ impl VoxelField3 {
     pub fn toward(
         region: &AccessibleRegion,
         goal: Cell3,
-        start: [f32; 3],
+        start: Point3m,
         band: f32,
     ) -> Result<Self> {
         let stop = region.cell(start, "start")?;

@@ -416,7 +416,7 @@ fn held_out_report(
             .iter()
             .map(|&c| {
                 let m = region.frame.center(c);
-                <[f32; 3]>::from(m)
+                Point3m::from(m)
             })
             .collect();
         let predicted = learned.values(&points)?;

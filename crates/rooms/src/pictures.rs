@@ -250,7 +250,7 @@ pub fn write_field_view(
                 .find(|&z| region.grid.is_free(Cell3::new(x, y, z)))
             {
                 let c = region.frame.center(Cell3::new(x, y, z));
-                values[(ny - 1 - y) * nx + x] = field.value(<[f32; 3]>::from(c))?;
+                values[(ny - 1 - y) * nx + x] = field.value(Point3m::from(c))?;
             }
         }
     }

@@ -13,7 +13,7 @@ use serde::{Deserialize, Serialize};
 
 /// The share (percent) of `targets` within `radius` of some point of `samples`; 100 for no
 /// targets.
-pub fn covered_pct(targets: &[[f32; 3]], samples: &[[f32; 3]], radius: f32) -> f64 {
+pub fn covered_pct(targets: &[Point3m], samples: &[Point3m], radius: f32) -> f64 {
     if targets.is_empty() {
         return 100.0;
     }
@@ -103,7 +103,7 @@ impl RegionQuality {
 /// As [`afford_all`].
 pub fn drawn_summary(
     scene: &Scene,
-    samples: &[[f32; 3]],
+    samples: &[Point3m],
     config: &RegionConfig,
 ) -> Result<serde_json::Value> {
     Ok(summarise_drawn(
@@ -114,7 +114,7 @@ pub fn drawn_summary(
 
 /// [`drawn_summary`] of `samples` whose filter answers (as [`afford_all`] gives them, in
 /// order) are `affords`.
-pub fn summarise_drawn(samples: &[[f32; 3]], affords: &[Afford]) -> serde_json::Value {
+pub fn summarise_drawn(samples: &[Point3m], affords: &[Afford]) -> serde_json::Value {
     let mut heights = std::collections::BTreeMap::<i32, usize>::new();
     for s in samples {
         *heights.entry((s[2] * 10.0).floor() as i32).or_default() += 1;
@@ -138,11 +138,11 @@ pub fn summarise_drawn(samples: &[[f32; 3]], affords: &[Afford]) -> serde_json::
 /// As [`afford_all`]; [`RoomsError::InvalidInput`] for a room with no standing-affordable floor.
 pub fn region_quality(
     room: &Room,
-    samples: &[[f32; 3]],
+    samples: &[Point3m],
     config: &RegionConfig,
 ) -> Result<RegionQuality> {
     let affords = afford_all(&room.scene, samples, &config.filter)?;
-    let kept: Vec<[f32; 3]> = affords.iter().filter(|a| a.kept()).map(|a| a.at).collect();
+    let kept: Vec<Point3m> = affords.iter().filter(|a| a.kept()).map(|a| a.at).collect();
     let region = if kept.is_empty() {
         None
     } else {
@@ -162,7 +162,7 @@ pub fn judge_region(
     affords: &[Afford],
     region: Option<&AccessibleRegion>,
 ) -> Result<RegionQuality> {
-    let kept: Vec<[f32; 3]> = affords.iter().filter(|a| a.kept()).map(|a| a.at).collect();
+    let kept: Vec<Point3m> = affords.iter().filter(|a| a.kept()).map(|a| a.at).collect();
     let affordable = affords
         .iter()
         .filter(|a| a.kept() && a.valid.is_some())
@@ -175,7 +175,7 @@ pub fn judge_region(
         ));
     }
     let seats = seat_torsos(room)?;
-    let implausible_share = |points: &[[f32; 3]]| -> Result<f64> {
+    let implausible_share = |points: &[Point3m]| -> Result<f64> {
         let bad = points
             .par_iter()
             .map(|&p| implausible(room, p).map(|k| k.is_some()))
@@ -230,7 +230,7 @@ const STANDING_ABOVE: f32 = 0.6;
 ///
 /// # Errors
 /// [`RoomsError::InvalidInput`] for a point that is not finite.
-pub fn implausible(room: &Room, p: [f32; 3]) -> Result<Option<ObjectKind>> {
+pub fn implausible(room: &Room, p: Point3m) -> Result<Option<ObjectKind>> {
     if !p.iter().all(|v| v.is_finite()) {
         return Err(RoomsError::InvalidInput(format!(
             "torso location {p:?} is not finite"
@@ -267,7 +267,7 @@ pub fn implausible(room: &Room, p: [f32; 3]) -> Result<Option<ObjectKind>> {
 const SEAT_PART_SHARE: f32 = 0.5;
 
 /// Uniform samples in the room's box (interior, floor to wall top): the no-learning control.
-pub fn uniform_in_room(room: &Room, height: f32, n: usize, seed: u64) -> Vec<[f32; 3]> {
+pub fn uniform_in_room(room: &Room, height: f32, n: usize, seed: u64) -> Vec<Point3m> {
     let mut rng = envfield_grid::SplitMix64::new(seed ^ 0x0F1F);
     (0..n)
         .map(|_| {

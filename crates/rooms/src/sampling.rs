@@ -11,10 +11,10 @@ use envfield_vae::{Cvae, SampleOptions, NORMAL_SALT};
 ///
 /// # Errors
 /// Errors of the surface sampling (an empty scene).
-pub fn vae_cloud(vae: &Cvae, scene: &Scene, seed: u64) -> Result<Vec<[f32; 3]>> {
+pub fn vae_cloud(vae: &Cvae, scene: &Scene, seed: u64) -> Result<Vec<Point3m>> {
     Ok(sample_surface(scene, vae.cloud_points(), seed)?
         .iter()
-        .map(|p| <[f32; 3]>::from(*p))
+        .map(|p| Point3m::from(*p))
         .collect())
 }
 
@@ -31,7 +31,7 @@ pub fn draw_torsos(
     scene: &Scene,
     options: &SampleOptions,
     anchors_from: Option<&Cvae>,
-) -> Result<Vec<[f32; 3]>> {
+) -> Result<Vec<Point3m>> {
     let cloud = vae_cloud(vae, scene, options.seed)?;
     let Some(first) = anchors_from else {
         return Ok(vae.sample(&cloud, options)?);
@@ -123,7 +123,7 @@ pub fn middle_goal(region: &AccessibleRegion) -> Point3m {
         .iter()
         .filter(|s| region.contains(**s))
         .min_by(|a, b| {
-            let d = |s: &[f32; 3]| (s[0] - mean[0]).powi(2) + (s[1] - mean[1]).powi(2);
+            let d = |s: &Point3m| (s[0] - mean[0]).powi(2) + (s[1] - mean[1]).powi(2);
             d(a).total_cmp(&d(b))
         })
         .or(region.samples.first())

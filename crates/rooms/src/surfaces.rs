@@ -11,6 +11,7 @@
 
 use crate::{AccessibleRegion, RegionConfig, Result, RoomsError};
 use envfield_affordance::standing_pose;
+use envfield_grid::Point3m;
 use envfield_scene::nalgebra::{Point3, Vector3};
 use envfield_scene::Scene;
 use rayon::prelude::*;
@@ -32,7 +33,7 @@ const MAX_LAYERS: usize = 64;
 /// [`RoomsError::InvalidConfig`] for a spacing under 2 cm or not finite, or more than
 /// [`MAX_COLUMNS`] columns (naming the spacing that fits); [`RoomsError::InvalidInput`] for an
 /// empty scene.
-pub fn standing_torsos(scene: &Scene, spacing: f32) -> Result<Vec<[f32; 3]>> {
+pub fn standing_torsos(scene: &Scene, spacing: f32) -> Result<Vec<Point3m>> {
     if !(spacing.is_finite() && spacing >= 0.02) {
         return Err(RoomsError::InvalidConfig(format!(
             "standing torsos: a column spacing of at least 0.02 m (got {spacing})"
@@ -60,9 +61,9 @@ pub fn standing_torsos(scene: &Scene, spacing: f32) -> Result<Vec<[f32; 3]>> {
     let range = hi.z - lo.z + 0.2;
     let down = Vector3::new(0.0, 0.0, -1.0);
     let level = MAX_SLOPE_DEG.to_radians().cos();
-    let columns: Vec<Vec<[f32; 3]>> = (0..nx * ny)
+    let columns: Vec<Vec<Point3m>> = (0..nx * ny)
         .into_par_iter()
-        .map(|k| -> Result<Vec<[f32; 3]>> {
+        .map(|k| -> Result<Vec<Point3m>> {
             let x = lo.x + ((k / ny) as f32 + 0.5) * spacing;
             let y = lo.y + ((k % ny) as f32 + 0.5) * spacing;
             let hits = scene.surfaces_along(&Point3::new(x, y, top), &down, range, MAX_LAYERS)?;
@@ -98,7 +99,7 @@ mod tests {
     use envfield_scene::nalgebra::{Isometry3, Translation3, UnitQuaternion};
     use envfield_scene::{ObjectKind, Primitive, SceneObject};
 
-    fn slab(scene: &mut Scene, name: &str, size: [f32; 3], at: [f32; 3], pitch: f32) {
+    fn slab(scene: &mut Scene, name: &str, size: Point3m, at: Point3m, pitch: f32) {
         let pose = Isometry3::from_parts(
             Translation3::new(at[0], at[1], at[2]),
             UnitQuaternion::from_euler_angles(0.0, pitch, 0.0),

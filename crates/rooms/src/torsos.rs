@@ -8,6 +8,7 @@ use envfield_affordance::{
     walk_along, AffordanceConfig, FilterConfig, Pose, PoseSequence, Support, WalkConfig,
 };
 use envfield_eikonal::FastMarching;
+use envfield_grid::Point3m;
 use envfield_grid::{MoveRule, SplitMix64};
 use envfield_scene::nalgebra::{Point3, Vector3};
 use envfield_scene::{
@@ -60,7 +61,7 @@ impl Default for TorsoDataConfig {
 }
 
 /// The torso locations of a sequence's valid frames.
-fn valid_torsos(scene: &Scene, seq: &PoseSequence) -> Result<Vec<[f32; 3]>> {
+fn valid_torsos(scene: &Scene, seq: &PoseSequence) -> Result<Vec<Point3m>> {
     let reports = check_sequence(scene, seq, &AffordanceConfig::default())?;
     Ok(seq
         .frames
@@ -69,7 +70,7 @@ fn valid_torsos(scene: &Scene, seq: &PoseSequence) -> Result<Vec<[f32; 3]>> {
         .filter(|(_, r)| r.valid())
         .map(|(f, _)| {
             let t = f.torso();
-            <[f32; 3]>::from(t)
+            Point3m::from(t)
         })
         .collect())
 }
@@ -96,7 +97,7 @@ fn judged_in_place() -> FilterConfig {
 /// # Errors
 /// [`RoomsError::InvalidConfig`] for a spacing under 1 cm or bounds that are not finite or hold
 /// more than 4 million grid points.
-pub fn standing_floor(scene: &Scene, bounds: [f32; 4], spacing: f32) -> Result<Vec<[f32; 3]>> {
+pub fn standing_floor(scene: &Scene, bounds: [f32; 4], spacing: f32) -> Result<Vec<Point3m>> {
     if !(spacing.is_finite() && spacing > 0.01 && bounds.iter().all(|b| b.is_finite())) {
         return Err(RoomsError::InvalidConfig(format!(
             "floor grid: spacing above 0.01 m and finite bounds (got {spacing} and {bounds:?})"
@@ -110,9 +111,9 @@ pub fn standing_floor(scene: &Scene, bounds: [f32; 4], spacing: f32) -> Result<V
         )));
     }
     let cells: Vec<(usize, usize)> = (0..nx).flat_map(|i| (0..ny).map(move |j| (i, j))).collect();
-    let found: Vec<Option<[f32; 3]>> = cells
+    let found: Vec<Option<Point3m>> = cells
         .par_iter()
-        .map(|&(i, j)| -> Result<Option<[f32; 3]>> {
+        .map(|&(i, j)| -> Result<Option<Point3m>> {
             let pose = standing_at(
                 bounds[0] + (i as f32 + 0.5) * spacing,
                 bounds[1] + (j as f32 + 0.5) * spacing,
@@ -131,7 +132,7 @@ pub fn standing_floor(scene: &Scene, bounds: [f32; 4], spacing: f32) -> Result<V
                     Support::Standing,
                     &AffordanceConfig::default(),
                 )?;
-            Ok(fits.then_some(<[f32; 3]>::from(t)))
+            Ok(fits.then_some(Point3m::from(t)))
         })
         .collect::<Result<_>>()?;
     Ok(found.into_iter().flatten().collect())
@@ -140,7 +141,7 @@ pub fn standing_floor(scene: &Scene, bounds: [f32; 4], spacing: f32) -> Result<V
 /// Walks between random floor points along the exact floor path (fast marching on the
 /// bird's-eye map, inflated by the body radius), each with a seeded gait: the torsos of the
 /// valid frames.
-fn walks(room: &Room, cfg: &TorsoDataConfig, seed: u64) -> Result<Vec<[f32; 3]>> {
+fn walks(room: &Room, cfg: &TorsoDataConfig, seed: u64) -> Result<Vec<Point3m>> {
     let map = floor_map(
         &room.scene,
         &FloorMapConfig {
@@ -188,7 +189,7 @@ fn walks(room: &Room, cfg: &TorsoDataConfig, seed: u64) -> Result<Vec<[f32; 3]>>
                 .filter(|(_, r)| r.valid())
                 .map(|(f, _)| {
                     let t = f.torso();
-                    <[f32; 3]>::from(t)
+                    Point3m::from(t)
                 }),
         );
     }
@@ -229,7 +230,7 @@ pub fn room_torsos(room: &Room, cfg: &TorsoDataConfig, seed: u64) -> Result<Room
     let scene = &room.scene;
     let mut torsos = Vec::new();
     let mut sources = Vec::new();
-    let mut push = |ts: Vec<[f32; 3]>, s: TorsoSource| {
+    let mut push = |ts: Vec<Point3m>, s: TorsoSource| {
         sources.extend(std::iter::repeat_n(s, ts.len()));
         torsos.extend(ts);
     };
@@ -271,7 +272,7 @@ pub fn room_torsos(room: &Room, cfg: &TorsoDataConfig, seed: u64) -> Result<Room
     }
     let cloud = sample_surface(scene, cfg.cloud_points, seed ^ 0xC10D)?
         .iter()
-        .map(|p| <[f32; 3]>::from(*p))
+        .map(|p| Point3m::from(*p))
         .collect();
     Ok(RoomTorsos {
         cloud,
@@ -288,7 +289,7 @@ pub fn room_torsos(room: &Room, cfg: &TorsoDataConfig, seed: u64) -> Result<Room
 ///
 /// # Errors
 /// [`RoomsError::InvalidConfig`] for a spacing under 1 cm; errors of the filter.
-pub fn seat_grid(room: &Room, spacing: f32) -> Result<Vec<([f32; 3], Support)>> {
+pub fn seat_grid(room: &Room, spacing: f32) -> Result<Vec<(Point3m, Support)>> {
     if !(spacing.is_finite() && spacing > 0.01) {
         return Err(RoomsError::InvalidConfig(format!(
             "seat grid: spacing above 0.01 m (got {spacing})"
@@ -353,7 +354,7 @@ pub fn rooms_torsos(
 ///
 /// # Errors
 /// As [`sit_on`].
-pub fn seat_torsos(room: &Room) -> Result<Vec<[f32; 3]>> {
+pub fn seat_torsos(room: &Room) -> Result<Vec<Point3m>> {
     let mut out = Vec::new();
     for f in &room.furniture {
         if matches!(
@@ -362,7 +363,7 @@ pub fn seat_torsos(room: &Room) -> Result<Vec<[f32; 3]>> {
         ) {
             if let Some(seq) = sit_on(f)? {
                 let t = seq.frames.last().expect("a sequence has frames").torso();
-                out.push(<[f32; 3]>::from(t));
+                out.push(Point3m::from(t));
             }
         }
     }

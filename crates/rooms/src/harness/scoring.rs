@@ -54,7 +54,7 @@ pub fn fit(
         let pts: Vec<Point3<f32>> = path.iter().map(|&p| point(p)).collect();
         resample_path(&pts, step)?
             .iter()
-            .map(|p| <[f32; 3]>::from(*p))
+            .map(|p| Point3m::from(*p))
             .collect()
     } else {
         path.to_vec()

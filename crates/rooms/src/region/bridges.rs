@@ -7,6 +7,7 @@ use envfield_affordance::{
     check_pose, plausible, sit_down, Joint, PoseSequence, SitConfig, Support,
 };
 use envfield_grid::Grid3;
+use envfield_grid::Point3m;
 use envfield_scene::nalgebra::{Point3, Vector3};
 use envfield_scene::{Scene, VoxelFrame};
 use rayon::prelude::*;
@@ -59,7 +60,7 @@ pub(super) fn sit_down_bridges(
     scene: &Scene,
     frame: &VoxelFrame,
     all: &Grid3,
-    kept: &[[f32; 3]],
+    kept: &[Point3m],
     config: &RegionConfig,
 ) -> Result<Vec<SitDown>> {
     let components = all.free_components();
@@ -68,7 +69,7 @@ pub(super) fn sit_down_bridges(
     };
     // Each other set's samples (with their voxels), nearest the largest set first (in voxel
     // steps): a bed's edge, not its middle, is where a sit-down from the floor can end.
-    let mut by_set = std::collections::BTreeMap::<usize, Vec<(usize, [f32; 3])>>::new();
+    let mut by_set = std::collections::BTreeMap::<usize, Vec<(usize, Point3m)>>::new();
     for p in kept {
         if let Some(i) = frame.cell_of(&Point3::from(*p)).and_then(|c| all.index(c)) {
             let l = components.labels[i];
@@ -88,7 +89,7 @@ pub(super) fn sit_down_bridges(
             .and_then(|c| all.index(c))
             .is_some_and(|i| steps[i] <= 1)
     };
-    let tries: Vec<[f32; 3]> = by_set
+    let tries: Vec<Point3m> = by_set
         .into_values()
         .flat_map(|mut v| {
             v.sort_by_key(|&(i, _)| steps[i]);
@@ -168,9 +169,9 @@ pub(super) fn sit_down_bridges(
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SitDown {
     /// The torso where it starts, standing, metres.
-    pub start: [f32; 3],
+    pub start: Point3m,
     /// The torso where it ends, seated, metres.
-    pub seated: [f32; 3],
+    pub seated: Point3m,
     /// The seat's height above the surface under the feet, metres (0.3-0.75).
     pub seat_height: f32,
     /// The heading it is turned by, radians about +z.

@@ -4,6 +4,7 @@
 use super::{AccessibleRegion, SitDown};
 use crate::{Result, RoomsError};
 use envfield_affordance::Pose;
+use envfield_grid::Point3m;
 use envfield_grid::{Cell3, Grid3};
 use envfield_scene::nalgebra::Point3;
 use envfield_scene::{Scene, VoxelFrame};
@@ -67,10 +68,10 @@ impl<'a> Voxels<'a> {
 /// that end in it are the region's.
 pub(super) fn build(
     scene: &Scene,
-    kept: Vec<[f32; 3]>,
+    kept: Vec<Point3m>,
     voxel: f32,
-    joins: impl FnOnce(&[[f32; 3]]) -> Result<Vec<bool>>,
-    links: impl FnOnce(&VoxelFrame, &Grid3, &[[f32; 3]]) -> Result<Vec<SitDown>>,
+    joins: impl FnOnce(&[Point3m]) -> Result<Vec<bool>>,
+    links: impl FnOnce(&VoxelFrame, &Grid3, &[Point3m]) -> Result<Vec<SitDown>>,
 ) -> Result<AccessibleRegion> {
     if kept.is_empty() {
         return Err(RoomsError::InvalidInput(
@@ -99,7 +100,7 @@ pub(super) fn build(
 }
 
 /// A lattice of `voxel` covering the scene and every kept sample, with a voxel to spare.
-fn lattice(scene: &Scene, kept: &[[f32; 3]], voxel: f32) -> Result<VoxelFrame> {
+fn lattice(scene: &Scene, kept: &[Point3m], voxel: f32) -> Result<VoxelFrame> {
     let scene_box = scene
         .aabb()
         .ok_or_else(|| RoomsError::InvalidInput("the scene is empty".into()))?;
@@ -118,8 +119,8 @@ fn lattice(scene: &Scene, kept: &[[f32; 3]], voxel: f32) -> Result<VoxelFrame> {
 /// sample joins when `joins` says so of its centre.
 fn close_gaps(
     voxels: &mut Voxels<'_>,
-    kept: &[[f32; 3]],
-    joins: impl FnOnce(&[[f32; 3]]) -> Result<Vec<bool>>,
+    kept: &[Point3m],
+    joins: impl FnOnce(&[Point3m]) -> Result<Vec<bool>>,
 ) -> Result<()> {
     let [nx, ny, nz] = voxels.frame.shape;
     let mut near = vec![false; voxels.on.len()];
@@ -142,7 +143,7 @@ fn close_gaps(
         }
     }
     let candidates: Vec<usize> = (0..near.len()).filter(|&i| near[i]).collect();
-    let centres: Vec<[f32; 3]> = candidates
+    let centres: Vec<Point3m> = candidates
         .iter()
         .map(|&i| voxels.frame.center(voxels.cell(i)).into())
         .collect();

@@ -19,6 +19,7 @@ pub use config::RegionConfig;
 use crate::{Result, RoomsError};
 use envfield_affordance::{afford_all, Afford};
 use envfield_eikonal::FreeCells3;
+use envfield_grid::Point3m;
 use envfield_grid::{Cell3, Grid3};
 use envfield_scene::nalgebra::Point3;
 use envfield_scene::{Scene, VoxelFrame};
@@ -32,7 +33,7 @@ pub struct AccessibleRegion {
     /// Free voxels are accessible.
     pub grid: Grid3,
     /// The kept samples, metres.
-    pub samples: Vec<[f32; 3]>,
+    pub samples: Vec<Point3m>,
     /// Connected sets before the largest was kept.
     pub components: usize,
     /// The sit-downs that joined seats to the floor's set ([`AccessibleRegion::from_kept`]),
@@ -53,7 +54,7 @@ impl AccessibleRegion {
     pub fn new(
         frame: VoxelFrame,
         grid: Grid3,
-        samples: Vec<[f32; 3]>,
+        samples: Vec<Point3m>,
         components: usize,
     ) -> Result<Self> {
         if grid.shape() != frame.shape {
@@ -110,7 +111,7 @@ impl AccessibleRegion {
     ///
     /// # Errors
     /// As [`afford_all`] and [`AccessibleRegion::from_samples`].
-    pub fn from_drawn(scene: &Scene, samples: &[[f32; 3]], config: &RegionConfig) -> Result<Self> {
+    pub fn from_drawn(scene: &Scene, samples: &[Point3m], config: &RegionConfig) -> Result<Self> {
         config.validate()?;
         let kept = afford_all(scene, samples, &config.filter)?
             .iter()
@@ -129,7 +130,7 @@ impl AccessibleRegion {
     ///
     /// # Errors
     /// As [`afford_all`] and [`AccessibleRegion::from_samples`].
-    pub fn from_kept(scene: &Scene, kept: Vec<[f32; 3]>, config: &RegionConfig) -> Result<Self> {
+    pub fn from_kept(scene: &Scene, kept: Vec<Point3m>, config: &RegionConfig) -> Result<Self> {
         config.validate()?;
         if !config.filter.plausible {
             return Self::from_samples(scene, kept, config.voxel);
@@ -154,7 +155,7 @@ impl AccessibleRegion {
     /// # Errors
     /// [`RoomsError::InvalidInput`] for no samples (a scene with no floor keeps none) or an
     /// empty scene.
-    pub fn from_samples(scene: &Scene, kept: Vec<[f32; 3]>, voxel: f32) -> Result<Self> {
+    pub fn from_samples(scene: &Scene, kept: Vec<Point3m>, voxel: f32) -> Result<Self> {
         build::build(
             scene,
             kept,
@@ -165,14 +166,14 @@ impl AccessibleRegion {
     }
 
     /// Whether `p` (metres) lies in an accessible voxel.
-    pub fn contains(&self, p: [f32; 3]) -> bool {
+    pub fn contains(&self, p: Point3m) -> bool {
         self.frame
             .cell_of(&Point3::from(p))
             .is_some_and(|c| self.grid.is_free(c))
     }
 
     /// The accessible voxels' centres, metres.
-    pub fn voxel_centres(&self) -> Vec<[f32; 3]> {
+    pub fn voxel_centres(&self) -> Vec<Point3m> {
         self.free_indices()
             .iter()
             .map(|&i| self.frame.center(self.grid.cell(i)).into())
@@ -183,7 +184,7 @@ impl AccessibleRegion {
     ///
     /// # Errors
     /// [`RoomsError::InvalidInput`] naming `what` for a point outside the region.
-    pub fn cell(&self, p: [f32; 3], what: &str) -> Result<Cell3> {
+    pub fn cell(&self, p: Point3m, what: &str) -> Result<Cell3> {
         match self.frame.cell_of(&Point3::from(p)) {
             Some(c) if self.grid.is_free(c) => Ok(c),
             _ => Err(RoomsError::InvalidInput(format!(
