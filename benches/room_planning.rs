@@ -28,7 +28,7 @@ use envfield::eikonal::{FastMarching, Order};
 use envfield::grid::{Cell3, ContinuousField3};
 use envfield::nets::FieldNet;
 use envfield::rooms::harness::{
-    learned_table, pairs, FloorPlanner, Pair, PairOptions, PairSetup, PlannerKind, RoomContext,
+    learned_table, pairs, FloorPlanner, Pair, PairOptions, PairSetup, RoomContext, RoomPlanner,
     RunSettings, EXACT_BAND,
 };
 use envfield::rooms::nav::{BENEATH_CELL, DISTANCE_CELL};
@@ -126,7 +126,7 @@ impl Shared<'_> {
     /// expansions per step of the shortest walk.
     fn plan(
         &self,
-        planner: PlannerKind,
+        planner: RoomPlanner,
         t: &Timed,
         field: Option<&dyn ContinuousField3>,
         budget: f64,
@@ -155,14 +155,14 @@ impl Shared<'_> {
 impl Shared<'_> {
     /// One path of `planner` on pair `t` at room_nav's budget (50 expansions per step): ours
     /// on the exact field marches it inside the call, ours on the learned field reads `table`.
-    fn plan_marching(&self, planner: PlannerKind, t: &Timed, table: Option<&VoxelField3>) -> bool {
+    fn plan_marching(&self, planner: RoomPlanner, t: &Timed, table: Option<&VoxelField3>) -> bool {
         match planner {
-            PlannerKind::OursExact => {
+            RoomPlanner::OursExact => {
                 let field = ExactField3::toward(self.region, t.goal, t.pair.start, EXACT_BAND)
                     .expect("field");
                 self.plan(planner, t, Some(&field), 50.0)
             }
-            PlannerKind::Ours => {
+            RoomPlanner::Ours => {
                 let table = table.expect("ours needs its learned table");
                 self.plan(planner, t, Some(table), 50.0)
             }
@@ -263,16 +263,16 @@ fn bench_rooms(c: &mut Criterion) {
         navmesh: &navmesh,
     };
     let rows = [
-        ("ours", PlannerKind::Ours),
-        ("ours_exact", PlannerKind::OursExact),
-        ("ours_exact_with_goal", PlannerKind::OursExact),
-        ("ours_raw", PlannerKind::OursRaw),
-        ("ours_noaff", PlannerKind::OursNoAff),
-        ("navmesh", PlannerKind::Navmesh),
-        ("prm", PlannerKind::Prm),
-        ("rrtstar", PlannerKind::RrtStar),
-        ("rrtstar_5000", PlannerKind::RrtStarBig),
-        ("rrt", PlannerKind::Rrt),
+        ("ours", RoomPlanner::Ours),
+        ("ours_exact", RoomPlanner::OursExact),
+        ("ours_exact_with_goal", RoomPlanner::OursExact),
+        ("ours_raw", RoomPlanner::OursRaw),
+        ("ours_noaff", RoomPlanner::OursNoAff),
+        ("navmesh", RoomPlanner::Navmesh),
+        ("prm", RoomPlanner::Prm),
+        ("rrtstar", RoomPlanner::RrtStar),
+        ("rrtstar_5000", RoomPlanner::RrtStarBig),
+        ("rrt", RoomPlanner::Rrt),
     ];
     for (name, planner) in rows {
         group.bench_function(BenchmarkId::new(format!("walk/{name}"), n), |b| {
@@ -290,8 +290,8 @@ fn bench_rooms(c: &mut Criterion) {
                     }
                     _ => {
                         let field: Option<&dyn ContinuousField3> = match planner {
-                            PlannerKind::OursExact => Some(&exact[k]),
-                            PlannerKind::Ours | PlannerKind::OursNoAff => Some(&tables[k]),
+                            RoomPlanner::OursExact => Some(&exact[k]),
+                            RoomPlanner::Ours | RoomPlanner::OursNoAff => Some(&tables[k]),
                             _ => None,
                         };
                         walking.plan(planner, t, field, 50.0)
@@ -310,12 +310,12 @@ fn bench_rooms(c: &mut Criterion) {
         let m = sits.len();
         eprintln!("sit-down pairs: {m} in room {seed}");
         for (name, planner) in [
-            ("ours_exact_with_goal", PlannerKind::OursExact),
-            ("ours", PlannerKind::Ours),
-            ("prm", PlannerKind::Prm),
-            ("rrtstar", PlannerKind::RrtStar),
+            ("ours_exact_with_goal", RoomPlanner::OursExact),
+            ("ours", RoomPlanner::Ours),
+            ("prm", RoomPlanner::Prm),
+            ("rrtstar", RoomPlanner::RrtStar),
         ] {
-            let tables = if planner == PlannerKind::Ours {
+            let tables = if planner == RoomPlanner::Ours {
                 learned_tables(&net, &region, &sits)
             } else {
                 Vec::new()
@@ -376,9 +376,9 @@ fn bench_real(
     let tables = learned_tables(&net, &region, &walks);
     let n = walks.len();
     for (name, planner) in [
-        ("ours", PlannerKind::Ours),
-        ("ours_exact_with_goal", PlannerKind::OursExact),
-        ("prm", PlannerKind::Prm),
+        ("ours", RoomPlanner::Ours),
+        ("ours_exact_with_goal", RoomPlanner::OursExact),
+        ("prm", RoomPlanner::Prm),
     ] {
         group.bench_function(BenchmarkId::new(format!("real_walk/{name}"), n), |b| {
             let mut i = 0;

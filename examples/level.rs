@@ -22,7 +22,7 @@
 use anyhow::{bail, Context, Result};
 use clap::Parser;
 use envfield::rooms::harness::{
-    pairs, run_pair, PairOptions, PlannerKind, RoomContext, RunSettings,
+    pairs, run_pair, PairOptions, RoomContext, RoomPlanner, RunSettings,
 };
 use envfield::rooms::pictures::height_view;
 use envfield::rooms::tables::{finite_mean, Tally};
@@ -77,11 +77,11 @@ struct Args {
 }
 
 /// The planners of a level: ours on the exact field, PRM, RRT and the line.
-const PLANNERS: [PlannerKind; 4] = [
-    PlannerKind::OursExact,
-    PlannerKind::Prm,
-    PlannerKind::Rrt,
-    PlannerKind::Line,
+const PLANNERS: [RoomPlanner; 4] = [
+    RoomPlanner::OursExact,
+    RoomPlanner::Prm,
+    RoomPlanner::Rrt,
+    RoomPlanner::Line,
 ];
 
 fn main() -> Result<()> {
@@ -197,11 +197,11 @@ fn main() -> Result<()> {
         };
         let runs = run_pair(&room, pair, &PLANNERS, &settings)?;
         for r in &runs {
-            if i == 0 && r.planner != PlannerKind::OursExact && r.planner != PlannerKind::Line {
+            if i == 0 && r.planner != RoomPlanner::OursExact && r.planner != RoomPlanner::Line {
                 drawn.push((r.planner, r.path.clone()));
             }
         }
-        for r in runs.iter().filter(|r| r.planner == PlannerKind::OursExact) {
+        for r in runs.iter().filter(|r| r.planner == RoomPlanner::OursExact) {
             drawn.push((r.planner, r.path.clone()));
             if !r.outcome.reached {
                 eprintln!(

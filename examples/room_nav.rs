@@ -24,7 +24,7 @@ use envfield::affordance::{walk, WalkConfig};
 use envfield::nets::FieldNet;
 use envfield::rooms::field3_store::{save_tagged, FieldOrigin, Obtained};
 use envfield::rooms::harness::{
-    pairs, run_pair, FloorPlanner, PairOptions, PlannerKind, RoomContext, RunSettings,
+    pairs, run_pair, FloorPlanner, PairOptions, RoomContext, RoomPlanner, RunSettings,
 };
 use envfield::rooms::pictures::write_run_files;
 use envfield::rooms::tables::{finite_mean, mean_bytes, Tally};
@@ -100,7 +100,7 @@ struct Args {
     /// Only these planners, comma separated (ours, ours_raw, ours_noaff, ours_exact, rrt,
     /// rrtstar, rrtstar_big, prm, line, navmesh); every one by default.
     #[arg(long, value_delimiter = ',')]
-    planners: Option<Vec<PlannerKind>>,
+    planners: Option<Vec<RoomPlanner>>,
     /// Write one JSON line per pair and planner here (room, pair, kind, planner, seconds,
     /// its goal's seconds, reached, relaxed, valid share, path ratio, distance left).
     #[arg(long)]
@@ -196,7 +196,7 @@ fn main() -> Result<()> {
     let vae =
         Cvae::load(&vae_file).with_context(|| format!("loading the VAE {}", vae_file.display()))?;
     let rooms = args.scene.rooms(RoomConfig::default())?;
-    let planners = PlannerKind::chosen(args.planners.as_deref()).context("--planners")?;
+    let planners = RoomPlanner::chosen(args.planners.as_deref()).context("--planners")?;
     let needs_net = planners.iter().any(|p| p.learned());
     let mut walks_out = args
         .walks_out
@@ -227,10 +227,10 @@ fn main() -> Result<()> {
         };
         let (tables, tables_s) = RoomContext::tables(&scene)?;
         let mesh = Navmesh::for_room(&scene, &walk(&WalkConfig::default(), seed)?, seed);
-        let room_planners: Vec<PlannerKind> = planners
+        let room_planners: Vec<RoomPlanner> = planners
             .iter()
             .copied()
-            .filter(|&p| p != PlannerKind::Navmesh || mesh.is_some())
+            .filter(|&p| p != RoomPlanner::Navmesh || mesh.is_some())
             .collect();
         let room = RoomContext {
             scene: &scene,

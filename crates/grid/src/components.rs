@@ -42,7 +42,8 @@ impl Components {
         Self { labels, sizes }
     }
 
-    /// The largest component (the first of equal ones), `None` for an empty set.
+    /// The largest component (the last of equal ones, as `Iterator::max_by_key` gives it),
+    /// `None` for an empty set.
     pub fn largest(&self) -> Option<usize> {
         (0..self.sizes.len()).max_by_key(|&k| self.sizes[k])
     }

@@ -27,7 +27,7 @@
 //! A standing body's walk across a generated room, on the exact field, every pose checked:
 //!
 //! ```
-//! use envfield_rooms::harness::{pairs, run_pair, PairOptions, PlannerKind, RoomContext};
+//! use envfield_rooms::harness::{pairs, run_pair, PairOptions, RoomPlanner, RoomContext};
 //! use envfield_rooms::{standing_torsos, AccessibleRegion, RegionConfig};
 //! use envfield_scene::{generate_room, RoomConfig};
 //!
@@ -41,7 +41,7 @@
 //! let runs = run_pair(
 //!     &RoomContext::bare(&room.scene, &region),
 //!     pair,
-//!     &[PlannerKind::OursExact],
+//!     &[RoomPlanner::OursExact],
 //!     &Default::default(),
 //! )?;
 //! let ours = &runs[0].outcome;

@@ -1,7 +1,7 @@
 //! Pictures of rooms: a top view of the accessible region with paths, a ray-cast view of the
 //! room from above one wall with paths and poses, and a top view of a 3D field.
 
-use crate::harness::{PlannerKind, Run};
+use crate::harness::{RoomPlanner, Run};
 use crate::nav::point;
 use crate::{AccessibleRegion, Result, RoomsError};
 use envfield_affordance::{Joint, Pose};
@@ -14,24 +14,24 @@ use rayon::prelude::*;
 use std::path::Path;
 
 /// Each planner's colour in the pictures.
-pub fn planner_colour(planner: PlannerKind) -> [u8; 3] {
+pub fn planner_colour(planner: RoomPlanner) -> [u8; 3] {
     match planner {
-        PlannerKind::Ours => [220, 30, 30],
-        PlannerKind::OursRaw => [140, 20, 20],
-        PlannerKind::OursNoAff => [250, 150, 30],
-        PlannerKind::OursExact => [30, 160, 60],
-        PlannerKind::Rrt => [40, 90, 220],
-        PlannerKind::RrtStar => [130, 60, 200],
-        PlannerKind::RrtStarBig => [200, 80, 200],
-        PlannerKind::Prm => [20, 170, 190],
-        PlannerKind::Line => [90, 90, 90],
-        PlannerKind::Navmesh => [240, 200, 40],
+        RoomPlanner::Ours => [220, 30, 30],
+        RoomPlanner::OursRaw => [140, 20, 20],
+        RoomPlanner::OursNoAff => [250, 150, 30],
+        RoomPlanner::OursExact => [30, 160, 60],
+        RoomPlanner::Rrt => [40, 90, 220],
+        RoomPlanner::RrtStar => [130, 60, 200],
+        RoomPlanner::RrtStarBig => [200, 80, 200],
+        RoomPlanner::Prm => [20, 170, 190],
+        RoomPlanner::Line => [90, 90, 90],
+        RoomPlanner::Navmesh => [240, 200, 40],
     }
 }
 
 /// A top view, 6 pixels a voxel: accessible columns light, the rest dark, every planner's
 /// path in its colour, the first path's start green and goal magenta.
-pub fn top_view(region: &AccessibleRegion, paths: &[(PlannerKind, Vec<Point3m>)]) -> Canvas {
+pub fn top_view(region: &AccessibleRegion, paths: &[(RoomPlanner, Vec<Point3m>)]) -> Canvas {
     plan_view(region, 6, paths, Ends::First, |_| [225, 232, 220])
 }
 
@@ -41,7 +41,7 @@ pub fn top_view(region: &AccessibleRegion, paths: &[(PlannerKind, Vec<Point3m>)]
 pub fn height_view(
     region: &AccessibleRegion,
     scale: u32,
-    paths: &[(PlannerKind, Vec<Point3m>)],
+    paths: &[(RoomPlanner, Vec<Point3m>)],
 ) -> Canvas {
     // Colours span the region's own heights, not the scene's box.
     let nz = region.frame.shape[2];
@@ -83,7 +83,7 @@ enum Ends {
 fn plan_view(
     region: &AccessibleRegion,
     s: u32,
-    paths: &[(PlannerKind, Vec<Point3m>)],
+    paths: &[(RoomPlanner, Vec<Point3m>)],
     ends: Ends,
     colour: impl Fn(usize) -> [u8; 3],
 ) -> Canvas {
@@ -142,7 +142,7 @@ fn surface_colour(kind: ObjectKind) -> [f32; 3] {
 /// [`RoomsError::InvalidInput`] for an empty scene.
 pub fn room_view(
     scene: &Scene,
-    paths: &[(PlannerKind, Vec<Point3m>)],
+    paths: &[(RoomPlanner, Vec<Point3m>)],
     poses: &[Pose],
 ) -> Result<Canvas> {
     let aabb = scene

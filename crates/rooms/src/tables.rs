@@ -1,7 +1,7 @@
 //! The room tables' summary: every planner's outcomes gathered over pairs, as Table 3 (per
 //! planner over all pairs) and Table 4 (aligned poses per pair kind), in text and JSON.
 
-use crate::harness::{Outcome, PairKind, PlannerKind, Run};
+use crate::harness::{Outcome, PairKind, RoomPlanner, Run};
 use envfield_scene::Room;
 use serde_json::{json, Map, Value};
 use std::collections::BTreeMap;
@@ -24,7 +24,7 @@ pub fn finite_median(v: &[f64]) -> Option<f64> {
 /// One planner's outcomes on a set of pairs, summed up: what Table 3 gives over all pairs and
 /// Table 4 per kind of pair.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct Summary {
+pub struct PlannerSummary {
     /// Pairs.
     pub pairs: usize,
     /// Percent of the pairs reached (`None` for no pair).
@@ -47,15 +47,15 @@ pub struct Summary {
     pub path_ratio: Option<f64>,
     /// Mean shares of the poses supported, collision-free, valid and implausible, percent.
     pub support_pct: Option<f64>,
-    /// See [`Summary::support_pct`].
+    /// See [`PlannerSummary::support_pct`].
     pub free_pct: Option<f64>,
-    /// See [`Summary::support_pct`].
+    /// See [`PlannerSummary::support_pct`].
     pub valid_pct: Option<f64>,
-    /// See [`Summary::support_pct`] (`None` where the furniture is unknown).
+    /// See [`PlannerSummary::support_pct`] (`None` where the furniture is unknown).
     pub implausible_pct: Option<f64>,
 }
 
-impl Summary {
+impl PlannerSummary {
     /// The summary of `outcomes`.
     pub fn of(outcomes: &[&Outcome]) -> Self {
         let m = |f: &dyn Fn(&Outcome) -> f64| {
@@ -86,7 +86,7 @@ impl Summary {
 #[derive(Clone, Debug, Default)]
 pub struct Tally {
     /// Outcomes by the pair kind's name (so the tables list `sit` before `walk`).
-    by_kind: BTreeMap<&'static str, Vec<(PlannerKind, Outcome)>>,
+    by_kind: BTreeMap<&'static str, Vec<(RoomPlanner, Outcome)>>,
     pairs: usize,
 }
 
@@ -96,7 +96,7 @@ impl Tally {
         self.push(kind, runs.iter().map(|r| (r.planner, r.outcome.clone())));
     }
 
-    fn push(&mut self, kind: PairKind, outcomes: impl IntoIterator<Item = (PlannerKind, Outcome)>) {
+    fn push(&mut self, kind: PairKind, outcomes: impl IntoIterator<Item = (RoomPlanner, Outcome)>) {
         self.by_kind
             .entry(kind.name())
             .or_default()
@@ -125,7 +125,7 @@ impl Tally {
         self.pairs
     }
 
-    fn of(&self, planner: PlannerKind) -> Vec<&Outcome> {
+    fn of(&self, planner: RoomPlanner) -> Vec<&Outcome> {
         self.by_kind
             .values()
             .flatten()
@@ -139,7 +139,7 @@ impl Tally {
     /// `_free_pct`, `_valid_pct`, `_implausible_pct` (null where the furniture is unknown), and
     /// for ours `_no_route_pct` and `_relaxed_pct`) and as
     /// text rows.
-    pub fn table3(&self, planners: &[PlannerKind], line: &mut Value) -> String {
+    pub fn table3(&self, planners: &[RoomPlanner], line: &mut Value) -> String {
         let mut text = String::new();
         let _ = writeln!(
             text,
@@ -148,7 +148,7 @@ impl Tally {
         );
         for &planner in planners {
             let name = planner.name();
-            let sum = Summary::of(&self.of(planner));
+            let sum = PlannerSummary::of(&self.of(planner));
             let reach = sum.reach_pct.unwrap_or(0.0);
             line[format!("{name}_reach_pct")] = reach.into();
             if planner.field().is_some() {
@@ -181,7 +181,7 @@ impl Tally {
     /// Table 4 as JSON (`table4_<kind>`: per planner its shares, reach and pair count, and its
     /// path ratio, implausible share and seconds per path (mean and median) and per goal on
     /// that kind of pair) into `line` and as text rows.
-    pub fn table4(&self, planners: &[PlannerKind], line: &mut Value) -> String {
+    pub fn table4(&self, planners: &[RoomPlanner], line: &mut Value) -> String {
         let mut text = String::new();
         for (kind, results) in &self.by_kind {
             let mut per = Map::new();
@@ -191,7 +191,7 @@ impl Tally {
                     .filter(|(p, _)| *p == planner)
                     .map(|(_, o)| o)
                     .collect();
-                let sum = Summary::of(&os);
+                let sum = PlannerSummary::of(&os);
                 let _ = writeln!(
                     text,
                     "{kind:<5} {:<12} {:>6.1} {:>6.1} {:>6.1}  ({} pairs, {:.0}% reached)",

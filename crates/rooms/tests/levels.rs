@@ -4,7 +4,7 @@
 
 use envfield_affordance::{standing_pose, walk, WalkConfig};
 use envfield_grid::ContinuousField3;
-use envfield_rooms::harness::{run_pair, Pair, PairKind, PlannerKind, RoomContext, RunSettings};
+use envfield_rooms::harness::{run_pair, Pair, PairKind, RoomContext, RoomPlanner, RunSettings};
 use envfield_rooms::{standing_torsos, AccessibleRegion, ExactField3, RegionConfig};
 use envfield_scene::nalgebra::{Isometry3, Translation3, UnitQuaternion};
 use envfield_scene::{ObjectKind, Primitive, Scene, SceneObject};
@@ -80,7 +80,7 @@ fn the_standing_region_joins_two_floors_by_their_ramp_and_ours_climbs_it() {
         seed: 1,
         ..RunSettings::default()
     };
-    let runs = run_pair(&room, &pair, &[PlannerKind::OursExact], &settings).unwrap();
+    let runs = run_pair(&room, &pair, &[RoomPlanner::OursExact], &settings).unwrap();
     let ours = &runs[0];
     assert!(ours.outcome.reached, "{:?}", ours.outcome);
     assert!(ours.outcome.poses.valid >= 95.0, "{:?}", ours.outcome.poses);
@@ -95,7 +95,7 @@ fn the_standing_region_joins_two_floors_by_their_ramp_and_ours_climbs_it() {
         );
     }
     // Without a net, the planners that descend the learned field say so.
-    let e = run_pair(&room, &pair, &[PlannerKind::Ours], &settings)
+    let e = run_pair(&room, &pair, &[RoomPlanner::Ours], &settings)
         .unwrap_err()
         .to_string();
     assert!(e.contains("needs a field"), "{e}");

@@ -162,7 +162,7 @@ fn ours_reads_its_field_and_distances_once_and_the_costs_are_split() {
     use envfield_grid::ContinuousField3;
     use envfield_nets::{FieldNet, GoalConfig, ModelConfig};
     use envfield_rooms::harness::{
-        run_pair, Pair, PairKind, PlannerKind, RoomContext, RunSettings,
+        run_pair, Pair, PairKind, RoomContext, RoomPlanner, RunSettings,
     };
     use envfield_rooms::LearnedField3;
 
@@ -227,15 +227,15 @@ fn ours_reads_its_field_and_distances_once_and_the_costs_are_split() {
         seed: 1,
         ..RunSettings::default()
     };
-    let e = run_pair(&room, &pair, &[PlannerKind::Navmesh], &settings)
+    let e = run_pair(&room, &pair, &[RoomPlanner::Navmesh], &settings)
         .unwrap_err()
         .to_string();
     assert!(e.contains("no navigation mesh"), "{e}");
     room.navmesh = Some((&Straight, 0.25));
     let planners = [
-        PlannerKind::OursExact,
-        PlannerKind::Ours,
-        PlannerKind::Navmesh,
+        RoomPlanner::OursExact,
+        RoomPlanner::Ours,
+        RoomPlanner::Navmesh,
     ];
     let runs = run_pair(&room, &pair, &planners, &settings).unwrap();
     let exact = &runs[0].outcome;

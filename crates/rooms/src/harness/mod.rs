@@ -1,5 +1,5 @@
 //! The room navigation harness (paper Tables 3 and 4): the planners by name
-//! ([`PlannerKind`]), the walking and sit-down pairs ([`pairs()`]), one run of every planner on
+//! ([`RoomPlanner`]), the walking and sit-down pairs ([`pairs()`]), one run of every planner on
 //! a pair with its poses fitted and checked ([`run_pair`], [`fit`]). `room_nav`, `level` and the
 //! `room_planning` bench all run it; [`crate::tables`] sums it up.
 //!
@@ -15,7 +15,7 @@ mod scoring;
 
 pub use pairs::{pairs, standing_places, Pair, PairKind, PairOptions};
 pub use planner::{
-    learned_table, FieldKind, FloorPlanner, PairSetup, PlannerKind, EXACT_BAND, NEAR_STALL,
+    learned_table, FieldKind, FloorPlanner, PairSetup, RoomPlanner, EXACT_BAND, NEAR_STALL,
     PIN_RADIUS,
 };
 pub use run::{run_pair, RoomContext, RunSettings};

@@ -15,7 +15,7 @@ use std::str::FromStr;
 
 /// The planners of the room tables, in the tables' order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub enum PlannerKind {
+pub enum RoomPlanner {
     /// Ours: the search under the pose filter on the learned field, the region alone where
     /// that finds no route within the budget, then straight cuts the pose filter allows.
     Ours,
@@ -40,34 +40,34 @@ pub enum PlannerKind {
     Navmesh,
 }
 
-impl PlannerKind {
+impl RoomPlanner {
     /// Every planner, in the tables' order.
-    pub const ALL: [PlannerKind; 10] = [
-        PlannerKind::Ours,
-        PlannerKind::OursRaw,
-        PlannerKind::OursNoAff,
-        PlannerKind::OursExact,
-        PlannerKind::Rrt,
-        PlannerKind::RrtStar,
-        PlannerKind::RrtStarBig,
-        PlannerKind::Prm,
-        PlannerKind::Line,
-        PlannerKind::Navmesh,
+    pub const ALL: [RoomPlanner; 10] = [
+        RoomPlanner::Ours,
+        RoomPlanner::OursRaw,
+        RoomPlanner::OursNoAff,
+        RoomPlanner::OursExact,
+        RoomPlanner::Rrt,
+        RoomPlanner::RrtStar,
+        RoomPlanner::RrtStarBig,
+        RoomPlanner::Prm,
+        RoomPlanner::Line,
+        RoomPlanner::Navmesh,
     ];
 
     /// The planner's name in tables, JSON keys and file names.
     pub fn name(self) -> &'static str {
         match self {
-            PlannerKind::Ours => "ours",
-            PlannerKind::OursRaw => "ours_raw",
-            PlannerKind::OursNoAff => "ours_noaff",
-            PlannerKind::OursExact => "ours_exact",
-            PlannerKind::Rrt => "rrt",
-            PlannerKind::RrtStar => "rrtstar",
-            PlannerKind::RrtStarBig => "rrtstar_big",
-            PlannerKind::Prm => "prm",
-            PlannerKind::Line => "line",
-            PlannerKind::Navmesh => "navmesh",
+            RoomPlanner::Ours => "ours",
+            RoomPlanner::OursRaw => "ours_raw",
+            RoomPlanner::OursNoAff => "ours_noaff",
+            RoomPlanner::OursExact => "ours_exact",
+            RoomPlanner::Rrt => "rrt",
+            RoomPlanner::RrtStar => "rrtstar",
+            RoomPlanner::RrtStarBig => "rrtstar_big",
+            RoomPlanner::Prm => "prm",
+            RoomPlanner::Line => "line",
+            RoomPlanner::Navmesh => "navmesh",
         }
     }
 
@@ -75,16 +75,16 @@ impl PlannerKind {
     ///
     /// # Errors
     /// [`RoomsError::InvalidInput`] for an empty choice.
-    pub fn chosen(chosen: Option<&[PlannerKind]>) -> Result<Vec<PlannerKind>> {
+    pub fn chosen(chosen: Option<&[RoomPlanner]>) -> Result<Vec<RoomPlanner>> {
         match chosen {
             Some([]) => Err(RoomsError::InvalidInput(
                 "no planner chosen: name one at least".into(),
             )),
-            Some(p) => Ok(PlannerKind::ALL
+            Some(p) => Ok(RoomPlanner::ALL
                 .into_iter()
                 .filter(|k| p.contains(k))
                 .collect()),
-            None => Ok(PlannerKind::ALL.to_vec()),
+            None => Ok(RoomPlanner::ALL.to_vec()),
         }
     }
 
@@ -99,9 +99,9 @@ impl PlannerKind {
     /// Which field the planner descends, if any.
     pub fn field(self) -> Option<FieldKind> {
         match self {
-            PlannerKind::Ours | PlannerKind::OursNoAff => Some(FieldKind::LearnedTable),
-            PlannerKind::OursRaw => Some(FieldKind::Learned),
-            PlannerKind::OursExact => Some(FieldKind::Exact),
+            RoomPlanner::Ours | RoomPlanner::OursNoAff => Some(FieldKind::LearnedTable),
+            RoomPlanner::OursRaw => Some(FieldKind::Learned),
+            RoomPlanner::OursExact => Some(FieldKind::Exact),
             _ => None,
         }
     }
@@ -112,7 +112,7 @@ impl PlannerKind {
         self.field().is_some()
     }
 
-    /// One path from `start` to `goal`. `field` is the field of [`PlannerKind::field`]
+    /// One path from `start` to `goal`. `field` is the field of [`RoomPlanner::field`]
     /// (ignored by the others).
     ///
     /// # Errors
@@ -138,8 +138,8 @@ impl PlannerKind {
         };
         let region = *region;
         Ok(match self {
-            PlannerKind::Ours => search.search_relaxed(field()?, poses, region, start, goal)?,
-            PlannerKind::OursRaw => {
+            RoomPlanner::Ours => search.search_relaxed(field()?, poses, region, start, goal)?,
+            RoomPlanner::OursRaw => {
                 // The paper's search: its poses checked against the scene itself for support
                 // and collisions only, no cap on the checks.
                 let exact = PoseFilter {
@@ -154,17 +154,17 @@ impl PlannerKind {
                 };
                 paper.search(field()?, &exact, start, goal)?
             }
-            PlannerKind::OursNoAff => {
+            RoomPlanner::OursNoAff => {
                 let f = region as &dyn StepFilter;
                 let raw = search.search(field()?, f, start, goal)?;
                 search.shortcut(f, &raw, goal)?
             }
-            PlannerKind::OursExact => {
+            RoomPlanner::OursExact => {
                 search.search_relaxed(field()?, poses, region, start, goal)?
             }
-            PlannerKind::Rrt => rrt(region, start, goal, sampling)?,
-            PlannerKind::RrtStar => rrt_star(region, start, goal, sampling)?,
-            PlannerKind::RrtStarBig => rrt_star(
+            RoomPlanner::Rrt => rrt(region, start, goal, sampling)?,
+            RoomPlanner::RrtStar => rrt_star(region, start, goal, sampling)?,
+            RoomPlanner::RrtStarBig => rrt_star(
                 region,
                 start,
                 goal,
@@ -173,11 +173,11 @@ impl PlannerKind {
                     ..*sampling
                 },
             )?,
-            PlannerKind::Prm => prm(region, start, goal, sampling)?,
-            PlannerKind::Line => {
+            RoomPlanner::Prm => prm(region, start, goal, sampling)?,
+            RoomPlanner::Line => {
                 Path3::ending(straight_line(start, goal, search.step)?, goal, 0.02)
             }
-            PlannerKind::Navmesh => {
+            RoomPlanner::Navmesh => {
                 let mesh = navmesh.ok_or_else(|| {
                     RoomsError::InvalidInput(
                         "planner navmesh: no navigation mesh was given (RoomContext::navmesh)"
@@ -191,21 +191,21 @@ impl PlannerKind {
     }
 }
 
-impl fmt::Display for PlannerKind {
+impl fmt::Display for RoomPlanner {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(self.name())
     }
 }
 
-impl FromStr for PlannerKind {
+impl FromStr for RoomPlanner {
     type Err = RoomsError;
 
     fn from_str(s: &str) -> Result<Self> {
-        PlannerKind::ALL
+        RoomPlanner::ALL
             .into_iter()
             .find(|k| k.name() == s)
             .ok_or_else(|| {
-                let names: Vec<&str> = PlannerKind::ALL.iter().map(|k| k.name()).collect();
+                let names: Vec<&str> = RoomPlanner::ALL.iter().map(|k| k.name()).collect();
                 RoomsError::InvalidInput(format!(
                     "unknown planner `{s}` (one of {})",
                     names.join(", ")

@@ -2,7 +2,7 @@
 //! ([`RunSettings`]) and every planner on one pair ([`run_pair`]).
 
 use super::{
-    fit, learned_table, FieldKind, FloorPlanner, Outcome, Pair, PairKind, PairSetup, PlannerKind,
+    fit, learned_table, FieldKind, FloorPlanner, Outcome, Pair, PairKind, PairSetup, RoomPlanner,
     Run, EXACT_BAND,
 };
 use crate::{AccessibleRegion, ExactField3, LearnedField3, Result, SceneTables};
@@ -126,10 +126,10 @@ impl<'a> RoomContext<'a> {
     }
 
     /// The seconds `planner` spent on the room before any goal.
-    pub fn room_seconds(&self, planner: PlannerKind) -> f64 {
+    pub fn room_seconds(&self, planner: RoomPlanner) -> f64 {
         match planner {
-            PlannerKind::Ours | PlannerKind::OursExact => self.tables_s,
-            PlannerKind::Navmesh => self.navmesh.map_or(0.0, |(_, s)| s),
+            RoomPlanner::Ours | RoomPlanner::OursExact => self.tables_s,
+            RoomPlanner::Navmesh => self.navmesh.map_or(0.0, |(_, s)| s),
             _ => 0.0,
         }
     }
@@ -144,7 +144,7 @@ impl<'a> RoomContext<'a> {
 pub fn run_pair(
     room: &RoomContext,
     pair: &Pair,
-    planners: &[PlannerKind],
+    planners: &[RoomPlanner],
     settings: &RunSettings,
 ) -> Result<Vec<Run>> {
     let region = room.region;

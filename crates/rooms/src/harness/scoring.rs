@@ -1,7 +1,7 @@
 //! How a planner's path is scored: the pair's poses fitted along it and checked, and its
 //! outcome.
 
-use super::{PairKind, PlannerKind};
+use super::{PairKind, RoomPlanner};
 use crate::nav::point;
 use crate::{PoseFilter, Result};
 use envfield_affordance::{resample_path, AffordanceReport, PoseSequence};
@@ -105,7 +105,7 @@ pub struct Outcome {
 #[derive(Clone, Debug)]
 pub struct Run {
     /// The planner.
-    pub planner: PlannerKind,
+    pub planner: RoomPlanner,
     /// How it did.
     pub outcome: Outcome,
     /// Its path's torso locations.
