@@ -143,6 +143,22 @@ impl Afford {
 
 /// What the torso location `p` affords in `scene` (see the module's rules).
 ///
+/// ```
+/// use envfield_affordance::{afford, standing_pose, FilterConfig, Support};
+/// use envfield_scene::{generate_room, RoomConfig};
+///
+/// let room = generate_room(&RoomConfig::default(), 3)?;
+/// let map = envfield_scene::floor_map(&room.scene, &Default::default())?;
+/// let cell = map.grid.free_cells().nth(map.grid.free_count() / 2).unwrap();
+/// let [x, y] = map.frame.center(cell);
+/// // A standing torso over open floor is kept; the same place 2 m up affords nothing.
+/// let torso = standing_pose().torso().z;
+/// let here = afford(&room.scene, [x, y, torso], &FilterConfig::default())?;
+/// assert!(here.kept() && here.supported == Some(Support::Standing));
+/// assert!(!afford(&room.scene, [x, y, torso + 2.0], &FilterConfig::default())?.kept());
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+///
 /// # Errors
 /// [`AffordanceError::InvalidInput`] for a coordinate that is not finite.
 pub fn afford(scene: &Scene, p: [f32; 3], config: &FilterConfig) -> Result<Afford> {

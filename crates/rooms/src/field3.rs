@@ -52,7 +52,28 @@ pub struct VoxelField3 {
 pub type ExactField3 = VoxelField3;
 
 impl VoxelField3 {
-    /// The field of `region` for the goal at `goal` (metres).
+    /// The field of `region` for the goal at `goal` (metres): fast marching over the region's
+    /// accessible voxels, O(n log n) in their number.
+    ///
+    /// ```
+    /// use envfield_grid::{ContinuousField3, Grid3};
+    /// use envfield_rooms::{AccessibleRegion, ExactField3};
+    /// use envfield_scene::parry3d::bounding_volume::Aabb;
+    /// use envfield_scene::nalgebra::Point3;
+    /// use envfield_scene::VoxelFrame;
+    ///
+    /// // A corridor 4 m long, one 10 cm voxel wide and high: every voxel accessible.
+    /// let frame = VoxelFrame::covering(
+    ///     &Aabb::new(Point3::new(0.0, 0.0, 0.9), Point3::new(4.0, 0.1, 1.0)),
+    ///     0.1,
+    /// )?;
+    /// let grid = Grid3::new(frame.shape[0], frame.shape[1], frame.shape[2])?;
+    /// let region = AccessibleRegion::new(frame, grid, Vec::new(), 1)?;
+    /// let field = ExactField3::new(&region, [0.05, 0.05, 0.95])?;
+    /// let d = field.value([3.05, 0.05, 0.95])?;
+    /// assert!((d - 3.0).abs() < 0.05, "{d}");
+    /// # Ok::<(), envfield_rooms::RoomsError>(())
+    /// ```
     ///
     /// # Errors
     /// [`RoomsError::InvalidInput`] for a goal outside the accessible region.
