@@ -17,6 +17,17 @@
 //! - [`rooms`] (feature `rooms`): people in furnished rooms: accessible regions, exact and
 //!   learned 3D fields, pose filters, the room navigation harness and the crowd protocol.
 //!
+//! Three ways in:
+//!
+//! 1. **A field**: `eikonal::FastMarching::solve2` / `solve3` on your grid (below), or a
+//!    learned one, `nets::FieldNet::load`; both answer `grid::FieldModel`.
+//! 2. **A 2D path**: `plan::FieldDescent::new(model, rule).plan(&grid, start, goal, steps)`
+//!    on any `FieldModel`; several people at once with `plan::crowd`.
+//! 3. **A region and a 3D path**: `rooms::sample_region` (or `rooms::standing_torsos` for a
+//!    game level) gives a scene's accessible region, `rooms::ExactField3` its field, and
+//!    `rooms::harness::run_pair` every planner's path with its poses checked; the
+//!    `envfield-rooms` crate doc runs one on a generated room.
+//!
 //! The four features are on by default. With `default-features = false` envfield is grids, fast
 //! marching, mazes and planners, and pulls in neither candle nor parry3d. The `cuda` feature
 //! runs the networks on an NVIDIA GPU through candle.
