@@ -5,9 +5,7 @@ use crate::harness::{RoomPlanner, Run};
 use crate::nav::point;
 use crate::{AccessibleRegion, Result, RoomsError};
 use envfield_affordance::{Joint, Pose};
-use envfield_grid::{
-    height_colour, Canvas, Cell3, ContinuousField3, Field2, HeatMapStyle, Point3m,
-};
+use envfield_grid::{height_colour, Canvas, Cell3, ContinuousField3, HeatMapStyle, Point3m};
 use envfield_scene::nalgebra::{Point3, Vector3};
 use envfield_scene::{write_polyline_obj, ObjectKind, Scene};
 use rayon::prelude::*;
@@ -241,20 +239,8 @@ pub fn write_field_view(
     field: &dyn ContinuousField3,
     path: impl AsRef<Path>,
 ) -> Result<()> {
-    let [nx, ny, nz] = region.frame.shape;
-    let mut values = vec![f32::INFINITY; nx * ny];
-    for x in 0..nx {
-        for y in 0..ny {
-            if let Some(z) = (0..nz)
-                .rev()
-                .find(|&z| region.grid.is_free(Cell3::new(x, y, z)))
-            {
-                let c = region.frame.center(Cell3::new(x, y, z));
-                values[(ny - 1 - y) * nx + x] = field.value(Point3m::from(c))?;
-            }
-        }
-    }
-    Field2::new(ny, nx, values)?.write_png(
+    let values = region.plan_view(|c| Ok(field.value(Point3m::from(region.frame.center(c)))?))?;
+    values.write_png(
         path,
         &HeatMapStyle {
             scale: 6,

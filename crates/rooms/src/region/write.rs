@@ -57,21 +57,8 @@ impl AccessibleRegion {
     /// # Errors
     /// I/O errors, naming the file.
     pub fn write_png(&self, path: impl AsRef<Path>, scale: u32) -> Result<()> {
-        let [nx, ny, nz] = self.frame.shape;
-        let mut values = vec![f32::INFINITY; nx * ny];
-        for x in 0..nx {
-            for y in 0..ny {
-                if let Some(z) = (0..nz)
-                    .rev()
-                    .find(|&z| self.grid.is_free(Cell3::new(x, y, z)))
-                {
-                    let h = self.frame.center(Cell3::new(x, y, z)).z;
-                    values[(ny - 1 - y) * nx + x] = h;
-                }
-            }
-        }
-        let field = Field2::new(ny, nx, values)?;
-        field.write_png(
+        let heights = self.plan_view(|c| Ok(self.frame.center(c).z))?;
+        heights.write_png(
             path,
             &HeatMapStyle {
                 scale: scale.max(1),
@@ -79,5 +66,26 @@ impl AccessibleRegion {
             },
         )?;
         Ok(())
+    }
+
+    /// The region from above, north up: each floor column's `value` at its highest accessible
+    /// voxel, infinite where the column has none (a heat map draws it grey).
+    ///
+    /// # Errors
+    /// The first error of `value`.
+    pub fn plan_view(&self, mut value: impl FnMut(Cell3) -> Result<f32>) -> Result<Field2> {
+        let [nx, ny, nz] = self.frame.shape;
+        let mut values = vec![f32::INFINITY; nx * ny];
+        for x in 0..nx {
+            for y in 0..ny {
+                let top = (0..nz)
+                    .rev()
+                    .find(|&z| self.grid.is_free(Cell3::new(x, y, z)));
+                if let Some(z) = top {
+                    values[(ny - 1 - y) * nx + x] = value(Cell3::new(x, y, z))?;
+                }
+            }
+        }
+        Ok(Field2::new(ny, nx, values)?)
     }
 }
