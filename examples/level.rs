@@ -193,6 +193,8 @@ fn main() -> Result<()> {
             big_budget: 0,
             sampler_budget: args.sampler_budget,
             seed: args.seed + i as u64,
+            // A level's strict searches near a goal run longer than a room's: no limit.
+            near_stall: 0,
             ..RunSettings::default()
         };
         let runs = run_pair(&room, pair, &PLANNERS, &settings)?;

@@ -304,7 +304,7 @@ impl<'a> PairSetup<'a> {
                     // A sit-down wears the frame nearest its torso, not a gait's: its goal
                     // does not stand only at a few phases.
                     near_stall: if pair.kind == PairKind::Walk {
-                        NEAR_STALL
+                        settings.near_stall
                     } else {
                         0
                     },
@@ -326,8 +326,10 @@ impl<'a> PairSetup<'a> {
 /// within two steps of it ([`FieldSearch3::near_stall`]), before ours falls back to the region
 /// alone: a goal a body fits only at a few frames and headings is come close to early, and
 /// the search would otherwise spend its whole budget on the rest of the room. Set above the
-/// longest such run of any strict search that went on to land (`docs/notes/performance-history.md`), so it
-/// ends only searches that would have failed.
+/// longest such run of any strict search in a room that went on to land
+/// (`docs/notes/performance-history.md`), so there it ends only searches that would have
+/// failed; on a game level it ended two that would have landed, and `level` runs without it
+/// ([`RunSettings::near_stall`](super::RunSettings::near_stall)).
 pub const NEAR_STALL: usize = 2500;
 
 /// How far past a pair's start, and how much longer than the shortest way, ours' exact field

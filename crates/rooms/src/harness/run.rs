@@ -29,6 +29,12 @@ pub struct RunSettings {
     pub sampler_budget: usize,
     /// The samplers' seed.
     pub seed: u64,
+    /// Ours' pose checks at most without coming nearer a walk's goal once within two steps
+    /// of it ([`FieldSearch3::near_stall`](envfield_plan::space3::FieldSearch3::near_stall),
+    /// 0 for no limit): [`NEAR_STALL`](super::NEAR_STALL) in rooms, where it was set; 0 on
+    /// game levels, whose checks ask the scene itself and whose strict searches near a goal
+    /// run longer (with the limit, 2 of the dungeon's 20 walks fell back to the region alone).
+    pub near_stall: usize,
 }
 
 impl Default for RunSettings {
@@ -39,6 +45,7 @@ impl Default for RunSettings {
             big_budget: 5000,
             sampler_budget: SamplingConfig::default().budget,
             seed: SamplingConfig::default().seed,
+            near_stall: super::NEAR_STALL,
         }
     }
 }
