@@ -141,14 +141,22 @@ pub fn region_quality(
     samples: &[Point3m],
     config: &RegionConfig,
 ) -> Result<RegionQuality> {
+    Ok(judged(room, samples, config)?.0)
+}
+
+/// [`region_quality`] with the region it judged (`None` when no sample is kept): the filter
+/// asked once, its answers read by both.
+fn judged(
+    room: &Room,
+    samples: &[Point3m],
+    config: &RegionConfig,
+) -> Result<(RegionQuality, Option<AccessibleRegion>)> {
     let affords = afford_all(&room.scene, samples, &config.filter)?;
     let kept: Vec<Point3m> = affords.iter().filter(|a| a.kept()).map(|a| a.at).collect();
-    let region = if kept.is_empty() {
-        None
-    } else {
-        Some(AccessibleRegion::from_kept(&room.scene, kept, config)?)
-    };
-    judge_region(room, &affords, region.as_ref())
+    let region = (!kept.is_empty())
+        .then(|| AccessibleRegion::from_kept(&room.scene, kept, config))
+        .transpose()?;
+    Ok((judge_region(room, &affords, region.as_ref())?, region))
 }
 
 /// [`region_quality`] of samples whose filter answers (as [`afford_all`] gives them) are
@@ -311,13 +319,8 @@ impl HeldOut {
         uniform: &[Point3m],
         config: &RegionConfig,
     ) -> Result<Option<AccessibleRegion>> {
-        let affords = afford_all(&room.scene, drawn, &config.filter)?;
-        let kept: Vec<Point3m> = affords.iter().filter(|a| a.kept()).map(|a| a.at).collect();
-        let region = (!kept.is_empty())
-            .then(|| AccessibleRegion::from_kept(&room.scene, kept, config))
-            .transpose()?;
-        self.ours
-            .push(judge_region(room, &affords, region.as_ref())?);
+        let (ours, region) = judged(room, drawn, config)?;
+        self.ours.push(ours);
         self.untrained.push(region_quality(room, twin, config)?);
         self.uniform.push(region_quality(room, uniform, config)?);
         Ok(region)
