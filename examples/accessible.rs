@@ -167,8 +167,10 @@ fn one(args: &Args, vae: &Cvae) -> Result<()> {
     let t = Instant::now();
     // The filter once: the region, its quality and the summary all read its answers.
     let affords = afford_all(&scene, &samples, &config.filter)?;
+    let filter_ms = t.elapsed().as_secs_f64() * 1e3;
     let kept = affords.iter().filter(|a| a.kept()).map(|a| a.at).collect();
-    let region = AccessibleRegion::from_kept(&scene, kept, &config)?;
+    let mut region = AccessibleRegion::from_kept(&scene, kept, &config)?;
+    region.times.filter_ms = filter_ms;
     let region_ms = t.elapsed().as_secs_f64() * 1e3;
     region.write_files(&args.out)?;
     let goal = middle_goal(&region);
@@ -204,6 +206,7 @@ fn one(args: &Args, vae: &Cvae) -> Result<()> {
         "learned_field": learned,
         "sample_ms": sample_ms,
         "filter_and_voxels_ms": region_ms,
+        "region_split_ms": region.times,
         "out": args.out,
     });
     envfield::grid::write_atomic(

@@ -190,6 +190,30 @@ pub fn pose_valid<S: SignedDistance + ?Sized>(
     Ok(!any)
 }
 
+/// Whether `pose` is supported: [`check_pose`]'s [`AffordanceReport::supported`], reading
+/// the support joints alone (two to five of the 22) and stopping at the first that decides
+/// it. The torso filter asks this first of each of its 32 tries, most of them in the air.
+///
+/// # Errors
+/// As [`check_pose`].
+pub fn pose_supported<S: SignedDistance + ?Sized>(
+    scene: &S,
+    pose: &Pose,
+    support: Support,
+    config: &AffordanceConfig,
+) -> Result<bool> {
+    config.validate()?;
+    pose.validate()?;
+    let any = support.any_joint_suffices();
+    for j in support.joints() {
+        let p = &pose.joints[j.index()];
+        if rests_on(scene, p, scene.distance_at(p)?, config)? == any {
+            return Ok(any);
+        }
+    }
+    Ok(!any)
+}
+
 /// Whether every bone of `pose` (the segment from each joint to its parent) keeps its
 /// distance from geometry along its whole length, not only at its joints: a thigh can pass
 /// through a table top between a hip above it and a knee below it while every joint is clear.

@@ -21,7 +21,7 @@
 //! for it.
 
 use crate::{
-    bones_clear, check_pose, lie_down, sit_down, standing_pose, AffordanceConfig, AffordanceError,
+    bones_clear, check_pose, lie_down, pose_supported, sit_down, standing_pose, AffordanceConfig, AffordanceError,
     Joint, LieConfig, Pose, Result, SitConfig, Support,
 };
 use envfield_scene::nalgebra::{Point3, Vector3};
@@ -223,6 +223,10 @@ fn afford_at(scene: &Scene, p: [f32; 3], config: &FilterConfig, kit: &Kit) -> Re
     });
     for (pose, support, yaw) in tries {
         let placed = pose.rotated_about_z(yaw, &Point3::origin()).translated(&to);
+        // The support joints alone first: most tries rest on nothing.
+        if !pose_supported(scene, &placed, support, &config.affordance)? {
+            continue;
+        }
         let r = check_pose(scene, &placed, support, &config.affordance)?;
         if !r.supported
             || (config.plausible && !plausible(scene, &placed, support, &config.affordance)?)

@@ -39,7 +39,8 @@ mod skeleton;
 
 pub use align::{align_in_scene, align_to_trajectory, resample_path, walk_along, AlignConfig};
 pub use check::{
-    bones_clear, check_pose, check_sequence, pose_valid, AffordanceConfig, AffordanceReport,
+    bones_clear, check_pose, check_sequence, pose_supported, pose_valid, AffordanceConfig,
+    AffordanceReport,
 };
 pub use error::{AffordanceError, Result};
 pub use filter::{afford, afford_all, plausible, Afford, FilterConfig};

@@ -7,7 +7,7 @@ use crate::{AccessibleRegion, Field3Report, RegionConfig, Result, RoomsError};
 use envfield_affordance::{afford_all, Afford};
 use envfield_grid::Point3m;
 use envfield_scene::nalgebra::{Point3, Vector3};
-use envfield_scene::{ObjectKind, Room, Scene};
+use envfield_scene::{Apartment, ObjectKind, Room, Scene};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -51,6 +51,14 @@ pub struct RegionQuality {
     /// the samples cover may still be left out of it, and out of every planner's reach.
     #[serde(default)]
     pub region_seat_coverage_pct: f64,
+    /// Beds whose lying torso location (the last frame of [`sit_on`](envfield_affordance::sit_on)
+    /// on a bed) lies within [`SEAT_NEAR`] of an accessible region voxel's centre, percent
+    /// (100 for a room without beds).
+    #[serde(default)]
+    pub region_bed_coverage_pct: f64,
+    /// Beds in the room.
+    #[serde(default)]
+    pub beds: usize,
     /// Kept samples that [`implausible`] finds on or inside furniture people do not use that
     /// way, percent of those kept.
     pub implausible_pct: f64,
@@ -72,6 +80,7 @@ impl RegionQuality {
             "floor_coverage_pct": m(|x| x.floor_coverage_pct),
             "seat_coverage_pct": m(|x| x.seat_coverage_pct),
             "region_seat_coverage_pct": m(|x| x.region_seat_coverage_pct),
+            "region_bed_coverage_pct": m(|x| x.region_bed_coverage_pct),
             "implausible_pct": m(|x| x.implausible_pct),
             "region_implausible_pct": m(|x| x.region_implausible_pct),
         })
@@ -88,6 +97,7 @@ impl RegionQuality {
         out["min_floor_coverage_pct"] = least(|q| q.floor_coverage_pct).into();
         out["min_seat_coverage_pct"] = least(|q| q.seat_coverage_pct).into();
         out["min_region_seat_coverage_pct"] = least(|q| q.region_seat_coverage_pct).into();
+        out["min_region_bed_coverage_pct"] = least(|q| q.region_bed_coverage_pct).into();
         let most = |f: fn(&RegionQuality) -> f64| qualities.iter().map(f).fold(0.0f64, f64::max);
         out["max_implausible_pct"] = most(|q| q.implausible_pct).into();
         out["max_region_implausible_pct"] = most(|q| q.region_implausible_pct).into();
@@ -151,11 +161,16 @@ fn judged(
     samples: &[Point3m],
     config: &RegionConfig,
 ) -> Result<(RegionQuality, Option<AccessibleRegion>)> {
+    let start = std::time::Instant::now();
     let affords = afford_all(&room.scene, samples, &config.filter)?;
+    let filter_ms = start.elapsed().as_secs_f64() * 1e3;
     let kept: Vec<Point3m> = affords.iter().filter(|a| a.kept()).map(|a| a.at).collect();
-    let region = (!kept.is_empty())
+    let mut region = (!kept.is_empty())
         .then(|| AccessibleRegion::from_kept(&room.scene, kept, config))
         .transpose()?;
+    if let Some(r) = region.as_mut() {
+        r.times.filter_ms = filter_ms;
+    }
     Ok((judge_region(room, &affords, region.as_ref())?, region))
 }
 
@@ -183,6 +198,7 @@ pub fn judge_region(
         ));
     }
     let seats = seat_torsos(room)?;
+    let beds = bed_torsos(room)?;
     let implausible_share = |points: &[Point3m]| -> Result<f64> {
         let bad = points
             .par_iter()
@@ -190,17 +206,19 @@ pub fn judge_region(
             .collect::<Result<Vec<bool>>>()?;
         Ok(100.0 * bad.iter().filter(|&&b| b).count() as f64 / points.len().max(1) as f64)
     };
-    let (region_voxels, region_implausible_pct, region_seat_coverage_pct) = match region {
-        None => (0, 0.0, 0.0),
-        Some(region) => {
-            let centres = region.voxel_centres();
-            (
-                centres.len(),
-                implausible_share(&centres)?,
-                covered_pct(&seats, &centres, SEAT_NEAR),
-            )
-        }
-    };
+    let (region_voxels, region_implausible_pct, region_seat_coverage_pct, region_bed_coverage_pct) =
+        match region {
+            None => (0, 0.0, 0.0, 0.0),
+            Some(region) => {
+                let centres = region.voxel_centres();
+                (
+                    centres.len(),
+                    implausible_share(&centres)?,
+                    covered_pct(&seats, &centres, SEAT_NEAR),
+                    covered_pct(&beds, &centres, SEAT_NEAR),
+                )
+            }
+        };
     Ok(RegionQuality {
         implausible_pct: implausible_share(&kept)?,
         region_implausible_pct,
@@ -216,7 +234,36 @@ pub fn judge_region(
         seat_coverage_pct: covered_pct(&seats, &kept, SEAT_NEAR),
         seats: seats.len(),
         region_seat_coverage_pct,
+        region_bed_coverage_pct,
+        beds: beds.len(),
     })
+}
+
+/// The lying torso location of each bed of `room` ([`seat_torsos`] of its beds alone).
+fn bed_torsos(room: &Room) -> Result<Vec<Point3m>> {
+    let beds = Room {
+        scene: Scene::new(),
+        size: room.size,
+        furniture: room
+            .furniture
+            .iter()
+            .filter(|f| f.kind == ObjectKind::Bed)
+            .cloned()
+            .collect(),
+    };
+    seat_torsos(&beds)
+}
+
+/// Which rooms of `apartment` the region reaches: a room is reached when an accessible
+/// voxel's centre lies over its interior.
+pub fn rooms_reached(apartment: &Apartment, region: &AccessibleRegion) -> Vec<bool> {
+    let mut reached = vec![false; apartment.rooms.len()];
+    for c in region.voxel_centres() {
+        if let Some(r) = apartment.room_at(c[0], c[1]) {
+            reached[r] = true;
+        }
+    }
+    reached
 }
 
 /// How near a seat's seated torso location a sample or region voxel covers it, metres.

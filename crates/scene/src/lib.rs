@@ -37,6 +37,7 @@
 //! # Ok::<(), envfield_scene::SceneError>(())
 //! ```
 
+mod apartment;
 mod catalogue;
 mod columns;
 mod error;
@@ -51,7 +52,8 @@ mod sample;
 mod scene;
 mod solid;
 
-pub use catalogue::{catalogue_room, Catalogue, CatalogueItem, CATALOGUE_DIR};
+pub use apartment::{apartment, Apartment, ApartmentConfig, ApartmentRoom, Door, RoomType};
+pub use catalogue::{catalogue_room, Catalogue, CatalogueItem, Half, Role, CATALOGUE_DIR};
 pub use columns::{SurfaceColumns, SurfacesBeneath};
 pub use error::{Result, SceneError};
 pub use floor::{floor_map, FloorMap, FloorMapConfig, MapFrame};

@@ -136,15 +136,18 @@ impl TriangleMesh {
     }
 
     /// Reads the vertices (`v`) and faces (`f`, polygons fanned into triangles, `v/vt/vn` and
-    /// negative indices accepted) of a Wavefront OBJ file; other statements are ignored.
+    /// negative indices accepted) of a Wavefront OBJ file; other statements are ignored, and
+    /// so are faces of one or two vertices, which some exporters write for lines and points
+    /// (they hold no surface).
     ///
     /// # Errors
     /// [`SceneError::Parse`] naming the line of a malformed vertex or face, or a face index out
     /// of range; [`SceneError::EmptyMesh`] without faces; [`SceneError::Io`].
     pub fn read_obj(path: impl AsRef<Path>) -> Result<Self> {
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(|source| io(path, source))?;
-        Self::parse_obj(&text, path)
+        // Bytes that are not UTF-8 (a Latin-1 comment or material name) are never numbers.
+        let bytes = std::fs::read(path).map_err(|source| io(path, source))?;
+        Self::parse_obj(&String::from_utf8_lossy(&bytes), path)
     }
 
     /// Parses OBJ text as [`TriangleMesh::read_obj`] does; `source` names it in errors.
@@ -195,11 +198,8 @@ impl TriangleMesh {
                             Ok(i as u32)
                         })
                         .collect::<Result<_>>()?;
-                    if idx.len() < 3 {
-                        return Err(err(
-                            n,
-                            format!("a face needs at least 3 vertices: `{line}`"),
-                        ));
+                    if idx.is_empty() {
+                        return Err(err(n, format!("a face without vertices: `{line}`")));
                     }
                     for k in 1..idx.len() - 1 {
                         mesh.triangles.push([idx[0], idx[k], idx[k + 1]]);

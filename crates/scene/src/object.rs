@@ -132,6 +132,8 @@ pub enum ObjectKind {
     Shelf,
     /// A piano (walk around, sit on its stool).
     Piano,
+    /// A floor-standing plant (walk around).
+    Plant,
     /// A loaded triangle mesh (for example a scanned room).
     Mesh,
     /// Anything else.

@@ -148,7 +148,7 @@ impl Furniture {
     }
 }
 
-fn footprint(center: [f32; 2], yaw: f32, size: [f32; 3]) -> [f32; 4] {
+pub(crate) fn footprint(center: [f32; 2], yaw: f32, size: [f32; 3]) -> [f32; 4] {
     let quarter = ((yaw / FRAC_PI_2).round() as i64).rem_euclid(2) == 1;
     let (hx, hy) = if quarter {
         (size[1] / 2.0, size[0] / 2.0)
@@ -411,7 +411,7 @@ fn floor_connected(scene: &Scene) -> Result<bool> {
     Ok(map.grid.free_components().count() == 1)
 }
 
-fn shuffle<T>(items: &mut [T], rng: &mut SplitMix64) {
+pub(crate) fn shuffle<T>(items: &mut [T], rng: &mut SplitMix64) {
     for i in (1..items.len()).rev() {
         items.swap(i, rng.below(i + 1));
     }

@@ -1,7 +1,8 @@
 //! How a region is built from kept torso samples, step by step: the lattice, the samples'
 //! voxels, the gaps between them closed, the sit-downs laid in, the largest connected set.
 
-use super::{AccessibleRegion, SitDown};
+use super::{AccessibleRegion, BuildTimes, SitDown};
+use std::time::Instant;
 use crate::{Result, RoomsError};
 use envfield_affordance::Pose;
 use envfield_grid::Point3m;
@@ -80,22 +81,33 @@ pub(super) fn build(
                 .into(),
         ));
     }
+    let ms = |t: Instant| t.elapsed().as_secs_f64() * 1e3;
+    let mut times = BuildTimes::default();
+    let start = Instant::now();
     let frame = lattice(scene, &kept, voxel)?;
     let mut voxels = Voxels::new(&frame);
     for p in &kept {
         voxels.set(&Point3::from(*p));
     }
+    times.voxels_ms += ms(start);
+    let start = Instant::now();
     close_gaps(&mut voxels, &kept, joins)?;
+    times.gaps_ms = ms(start);
+    let start = Instant::now();
     let sit_downs = links(&frame, &voxels.grid()?, &kept)?;
     for sit in &sit_downs {
         lay_sit_down(&mut voxels, sit, voxel)?;
     }
+    times.sit_downs_ms = ms(start);
+    let start = Instant::now();
     let (grid, components) = largest_set(&voxels)?;
     let mut region = AccessibleRegion::new(frame, grid, kept, components)?;
     region.sit_downs = sit_downs
         .into_iter()
         .filter(|s| region.contains(s.seated))
         .collect();
+    times.voxels_ms += ms(start);
+    region.times = times;
     Ok(region)
 }
 

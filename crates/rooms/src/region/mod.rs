@@ -24,6 +24,21 @@ use envfield_grid::{Cell3, Grid3};
 use envfield_scene::nalgebra::Point3;
 use envfield_scene::{Scene, VoxelFrame};
 
+/// How long each step of a region's build took, milliseconds of wall time (0 for a step not
+/// run): the torso filter of the drawn samples, closing the gaps (the filter again, at the
+/// neighbouring voxels' centres), the sit-down bridges, and the voxels (lattice, sets).
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct BuildTimes {
+    /// The filter of the drawn samples.
+    pub filter_ms: f64,
+    /// The gaps between samples closed.
+    pub gaps_ms: f64,
+    /// The sit-downs that join seats to the floor.
+    pub sit_downs_ms: f64,
+    /// The lattice, the samples' voxels and the largest set.
+    pub voxels_ms: f64,
+}
+
 /// The accessible region of a scene: the voxels holding kept torso samples (and their six
 /// neighbours, closing the gaps between samples), reduced to its largest 26-connected set.
 #[derive(Clone, Debug)]
@@ -39,6 +54,8 @@ pub struct AccessibleRegion {
     /// The sit-downs that joined seats to the floor's set ([`AccessibleRegion::from_kept`]),
     /// each ending seated in the region.
     pub sit_downs: Vec<SitDown>,
+    /// How long each step of its build took.
+    pub times: BuildTimes,
     /// The accessible voxels' indices, made on first use.
     free: std::sync::OnceLock<Vec<usize>>,
     /// The accessible voxels numbered and linked for fast marching, made on first use.
@@ -75,6 +92,7 @@ impl AccessibleRegion {
             samples,
             components,
             sit_downs: Vec::new(),
+            times: BuildTimes::default(),
             free: std::sync::OnceLock::new(),
             cells: std::sync::OnceLock::new(),
         })
@@ -113,12 +131,16 @@ impl AccessibleRegion {
     /// As [`afford_all`] and [`AccessibleRegion::from_samples`].
     pub fn from_drawn(scene: &Scene, samples: &[Point3m], config: &RegionConfig) -> Result<Self> {
         config.validate()?;
+        let start = std::time::Instant::now();
         let kept = afford_all(scene, samples, &config.filter)?
             .iter()
             .filter(|a| a.kept())
             .map(|a| a.at)
             .collect();
-        Self::from_kept(scene, kept, config)
+        let filter_ms = start.elapsed().as_secs_f64() * 1e3;
+        let mut region = Self::from_kept(scene, kept, config)?;
+        region.times.filter_ms = filter_ms;
+        Ok(region)
     }
 
     /// The region of `kept` samples (already filtered by `config`'s filter): as
