@@ -98,6 +98,67 @@ struct Kit {
     /// Seated on a low seat (0.32 m: armchairs, low sofas), the knees bent further.
     sitting_low: Pose,
     lying: Pose,
+    /// Where each pose's support joints lie around the torso, in the order above.
+    reach: [Reach; 4],
+}
+
+/// Where a pose's support joints lie around its torso, whatever its heading: each joint on
+/// the circle of `radius` about the vertical line through the torso, `drop` below it.
+#[derive(Clone, Debug)]
+struct Reach {
+    /// `(drop, radius)` of each support joint, metres.
+    joints: Vec<(f32, f32)>,
+    /// Whether one resting joint suffices (standing) or every one must rest.
+    any: bool,
+}
+
+impl Reach {
+    fn of(pose: &Pose, support: Support) -> Self {
+        let t = pose.torso();
+        Self {
+            joints: support
+                .joints()
+                .iter()
+                .map(|j| {
+                    let p = pose.joints[j.index()];
+                    (t.z - p.z, (p.x - t.x).hypot(p.y - t.y))
+                })
+                .collect(),
+            any: support.any_joint_suffices(),
+        }
+    }
+
+    /// Whether no heading of the pose can rest with its torso at `at`: a support joint rests
+    /// only within the contact tolerance above a surface or the penetration below it, and the
+    /// distance to the nearest surface changes no faster than the point moves, so a joint
+    /// whose circle's centre lies farther than its radius plus both from every surface rests
+    /// at no heading. One read per joint (one for the standing pose's feet, at the same
+    /// drop), in place of eight headings' checks; the answer is the checks' own.
+    fn out_of_reach<S: SignedDistance + ?Sized>(
+        &self,
+        scene: &S,
+        at: &Point3<f32>,
+        affordance: &AffordanceConfig,
+    ) -> Result<bool> {
+        let tolerance = affordance.contact_tolerance.max(affordance.max_penetration) + 1e-4;
+        let mut read: Vec<(f32, f32)> = Vec::with_capacity(self.joints.len());
+        for &(drop, radius) in &self.joints {
+            let d = match read.iter().find(|(d0, _)| (d0 - drop).abs() < 1e-6) {
+                Some(&(_, d)) => d,
+                None => {
+                    let d = scene.distance_at(&Point3::new(at.x, at.y, at.z - drop))?;
+                    read.push((drop, d));
+                    d
+                }
+            };
+            let far = d.abs() > radius + tolerance;
+            if far != self.any {
+                // "All must rest": one joint out of reach decides; "any": one within does.
+                return Ok(far);
+            }
+        }
+        Ok(self.any)
+    }
 }
 
 impl Kit {
@@ -112,11 +173,22 @@ impl Kit {
             ..SitConfig::default()
         })?;
         let lie = lie_down(&LieConfig::default())?;
+        let standing = centre(standing_pose());
+        let sitting = centre(*sit.frames.last().expect("frames"));
+        let sitting_low = centre(*low.frames.last().expect("frames"));
+        let lying = centre(*lie.frames.last().expect("frames"));
+        let reach = [
+            Reach::of(&standing, Support::Standing),
+            Reach::of(&sitting, Support::Sitting),
+            Reach::of(&sitting_low, Support::Sitting),
+            Reach::of(&lying, Support::Lying),
+        ];
         Ok(Self {
-            standing: centre(standing_pose()),
-            sitting: centre(*sit.frames.last().expect("frames")),
-            sitting_low: centre(*low.frames.last().expect("frames")),
-            lying: centre(*lie.frames.last().expect("frames")),
+            standing,
+            sitting,
+            sitting_low,
+            lying,
+            reach,
         })
     }
 }
@@ -205,6 +277,11 @@ fn afford_at(scene: &Scene, p: [f32; 3], config: &FilterConfig, kit: &Kit) -> Re
         at: p,
     };
     let to = at.coords;
+    // A pose kind none of whose headings can rest is skipped whole (see `Reach`).
+    let mut out_of_reach = [false; 4];
+    for (k, reach) in kit.reach.iter().enumerate() {
+        out_of_reach[k] = reach.out_of_reach(scene, &at, &config.affordance)?;
+    }
     let tries = [
         (kit.standing, Support::Standing),
         (kit.sitting, Support::Sitting),
@@ -212,7 +289,9 @@ fn afford_at(scene: &Scene, p: [f32; 3], config: &FilterConfig, kit: &Kit) -> Re
         (kit.lying, Support::Lying),
     ]
     .into_iter()
-    .flat_map(|(pose, s)| {
+    .zip(out_of_reach)
+    .filter(|(_, far)| !far)
+    .flat_map(|((pose, s), _)| {
         (0..config.yaws).map(move |k| {
             (
                 pose,

@@ -32,6 +32,11 @@ use crate::TriangleMesh;
 /// workspace root.
 pub const CATALOGUE_DIR: &str = "data/sweethome3d";
 
+/// Where [`Catalogue::find_contrib`] looks when `ENVFIELD_SWEETHOME3D_CONTRIB` is not set,
+/// relative to the workspace root: the contributed libraries
+/// (`scripts/fetch_sweethome3d_contrib.sh`).
+pub const CONTRIB_DIR: &str = "data/sweethome3d-contrib";
+
 /// One piece of the catalogue.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CatalogueItem {
@@ -222,6 +227,19 @@ impl Catalogue {
         here.ancestors()
             .map(|d| d.join(CATALOGUE_DIR))
             .find(|d| d.join("DefaultFurnitureCatalog.properties").is_file())
+    }
+
+    /// The contributed libraries at `$ENVFIELD_SWEETHOME3D_CONTRIB`, or at [`CONTRIB_DIR`]
+    /// under the first of the current folder and its parents that holds them; `None` when
+    /// there are none (run `scripts/fetch_sweethome3d_contrib.sh`).
+    pub fn find_contrib() -> Option<PathBuf> {
+        if let Some(dir) = std::env::var_os("ENVFIELD_SWEETHOME3D_CONTRIB") {
+            return Some(PathBuf::from(dir));
+        }
+        let here = std::env::current_dir().ok()?;
+        here.ancestors()
+            .map(|d| d.join(CONTRIB_DIR))
+            .find(|d| d.join("PACKAGE").is_file())
     }
 
     /// Reads a catalogue folder: Sweet Home 3D's default catalogue

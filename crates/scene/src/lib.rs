@@ -53,7 +53,9 @@ mod scene;
 mod solid;
 
 pub use apartment::{apartment, Apartment, ApartmentConfig, ApartmentRoom, Door, RoomType};
-pub use catalogue::{catalogue_room, Catalogue, CatalogueItem, Half, Role, CATALOGUE_DIR};
+pub use catalogue::{
+    catalogue_room, Catalogue, CatalogueItem, Half, Role, CATALOGUE_DIR, CONTRIB_DIR,
+};
 pub use columns::{SurfaceColumns, SurfacesBeneath};
 pub use error::{Result, SceneError};
 pub use floor::{floor_map, FloorMap, FloorMapConfig, MapFrame};
