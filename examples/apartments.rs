@@ -67,6 +67,10 @@ struct Args {
     /// Print only the last line, one JSON object.
     #[arg(long)]
     json: bool,
+    /// Only time each apartment's region from its file (no controls, no figures): for a
+    /// quiet machine.
+    #[arg(long)]
+    timing: bool,
 }
 
 /// Torso samples for an apartment's floor, at the shipped density.
@@ -122,6 +126,14 @@ fn table(args: &Args, vae: &Cvae, catalogue: &Catalogue) -> Result<()> {
         for k in 0..args.count {
             let seed = args.first_seed + k;
             let apt = apartment(&models, &ApartmentConfig::default(), seed)?;
+            if args.timing {
+                let file = from_file(&apt, vae, seed, scratch.path())?;
+                extra.push(serde_json::json!({"seed": seed, "from_file": file,
+                    "triangles": apt.home.scene.to_mesh().triangles.len(),
+                    "area_m2": apt.home.size[0] * apt.home.size[1]}));
+                bar.inc(1);
+                continue;
+            }
             let n = samples_for(&apt);
             let drawn = draw(vae, &apt.home.scene, n, seed, Gate::Trained)?;
             let twin = draw(&untrained, &apt.home.scene, n, seed, Gate::Off)?;
@@ -216,8 +228,33 @@ fn one(args: &Args, vae: &Cvae, catalogue: &Catalogue, seed: u64) -> Result<()> 
     let region = AccessibleRegion::from_drawn(&apt.home.scene, &drawn, &RegionConfig::default())?;
     region.write_files(&args.out)?;
     room_view(&apt.home.scene, &[], &[])?.write_png(args.out.join("apartment.png"))?;
+    // Where the region lies over furniture nobody sits or lies on: voxels by piece, and
+    // their heights above the floor.
+    let mut over = std::collections::BTreeMap::<String, Vec<f32>>::new();
+    for c in region.voxel_centres() {
+        if let Some(f) = apt.home.furniture.iter().find(|f| !f.kind.is_seat() && f.covers(c[0], c[1])) {
+            let name = apt.home.scene.objects()[f.object].name.clone();
+            over.entry(name).or_default().push((c[2] * 100.0).round() / 100.0);
+        }
+    }
+    // Each seat: where a body sits on it (the sit-down's last torso) and how far the nearest
+    // accessible voxel's centre lies from there.
+    let centres = region.voxel_centres();
+    let mut seats = Vec::new();
+    for f in apt.home.furniture.iter().filter(|f| f.kind.is_seat()) {
+        let Some(seq) = envfield::affordance::sit_on(f)? else { continue };
+        let t = seq.frames.last().expect("frames").torso();
+        let near = centres
+            .iter()
+            .map(|c| ((c[0] - t.x).powi(2) + (c[1] - t.y).powi(2) + (c[2] - t.z).powi(2)).sqrt())
+            .fold(f32::INFINITY, f32::min);
+        let name = apt.home.scene.objects()[f.object].name.clone();
+        seats.push(serde_json::json!({"seat": name, "torso": [t.x, t.y, t.z], "nearest_voxel_m": near}));
+    }
     let summary = serde_json::json!({
         "seed": seed,
+        "seats": seats,
+        "over_furniture": over,
         "scene": scene_file,
         "rooms": apt.rooms,
         "doors": apt.doors,

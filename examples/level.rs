@@ -166,6 +166,7 @@ fn main() -> Result<()> {
         rise: args.rise,
         sit_downs: false,
         seed: args.seed,
+        ..PairOptions::default()
     };
     let pairs = pairs(None, &scene, &region, &options)?;
     if pairs.is_empty() {

@@ -4,8 +4,8 @@
 use anyhow::{Context, Result};
 use envfield_rooms::sampling::check_sample_density;
 use envfield_scene::{
-    catalogue_room, generate_room, read_scene, Catalogue, ImportConfig, Room, RoomConfig, Scene,
-    Units, UpAxis,
+    apartment, catalogue_room, generate_room, read_scene, ApartmentConfig, Catalogue, Half,
+    ImportConfig, Room, RoomConfig, Scene, Units, UpAxis,
 };
 use std::path::PathBuf;
 
@@ -28,6 +28,11 @@ pub struct SceneArgs {
     /// boxes (scripts/fetch_sweethome3d.sh fetches them).
     #[arg(long)]
     pub catalogue: bool,
+    /// Apartments of 2-4 rooms furnished with the evaluation half of the contributed models
+    /// (models by other modellers than the default catalogue's, never trained or tuned on;
+    /// scripts/fetch_sweethome3d_contrib.sh fetches them) instead of single rooms.
+    #[arg(long, conflicts_with = "catalogue")]
+    pub apartment: bool,
 }
 
 impl SceneArgs {
@@ -59,6 +64,16 @@ impl SceneArgs {
     /// No catalogue found with `--catalogue` (scripts/fetch_sweethome3d.sh fetches it), or
     /// one that cannot be read.
     pub fn rooms(&self, config: RoomConfig) -> Result<RoomMaker> {
+        let apartments = if self.apartment {
+            let dir = Catalogue::find_contrib().context(
+                "no contributed furniture: run scripts/fetch_sweethome3d_contrib.sh",
+            )?;
+            let read = Catalogue::read(&dir)
+                .with_context(|| format!("reading the furniture at {}", dir.display()))?;
+            Some(read.only(Half::Evaluation))
+        } else {
+            None
+        };
         let catalogue = if self.catalogue {
             let dir = Catalogue::find()
                 .context("no Sweet Home 3D catalogue: run scripts/fetch_sweethome3d.sh")?;
@@ -68,7 +83,11 @@ impl SceneArgs {
         } else {
             None
         };
-        Ok(RoomMaker { catalogue, config })
+        Ok(RoomMaker {
+            catalogue,
+            apartments,
+            config,
+        })
     }
 
     /// The scene of room `seed`: the file's when `--scene` names one (the same for every
@@ -83,19 +102,41 @@ impl SceneArgs {
         seed: u64,
         samples: Option<usize>,
     ) -> Result<(Scene, Option<Room>)> {
+        let (scene, room, _) = self.scene_in_rooms(rooms, seed, samples)?;
+        Ok((scene, room))
+    }
+
+    /// [`SceneArgs::scene`] with an apartment's rooms' interiors (empty for a file or a
+    /// single room).
+    ///
+    /// # Errors
+    /// As [`SceneArgs::scene`].
+    pub fn scene_in_rooms(
+        &self,
+        rooms: &RoomMaker,
+        seed: u64,
+        samples: Option<usize>,
+    ) -> Result<(Scene, Option<Room>, Vec<[f32; 4]>)> {
         match self.read(samples)? {
-            Some(scene) => Ok((scene, None)),
+            Some(scene) => Ok((scene, None, Vec::new())),
             None => {
-                let room = rooms.room(seed)?;
-                Ok((room.scene.clone(), Some(room)))
+                let (room, zones) = rooms.room_and_rooms(seed)?;
+                if let Some(n) = samples {
+                    if let Some(w) = check_sample_density(&room.scene, n)? {
+                        eprintln!("warning: {w}");
+                    }
+                }
+                Ok((room.scene.clone(), Some(room), zones))
             }
         }
     }
 }
 
-/// Generated rooms: the generator's boxes, or Sweet Home 3D's models.
+/// Generated rooms: the generator's boxes, Sweet Home 3D's models, or apartments furnished
+/// with the evaluation half of the contributed models.
 pub struct RoomMaker {
     catalogue: Option<Catalogue>,
+    apartments: Option<Catalogue>,
     config: RoomConfig,
 }
 
@@ -105,14 +146,28 @@ impl RoomMaker {
     /// # Errors
     /// Errors of the generator (a config it cannot lay out).
     pub fn room(&self, seed: u64) -> Result<Room> {
+        Ok(self.room_and_rooms(seed)?.0)
+    }
+
+    /// Room `seed` and, for an apartment, its rooms' interiors (`[x_min, y_min, x_max,
+    /// y_max]`; empty for a single room).
+    ///
+    /// # Errors
+    /// As [`RoomMaker::room`].
+    pub fn room_and_rooms(&self, seed: u64) -> Result<(Room, Vec<[f32; 4]>)> {
+        if let Some(models) = &self.apartments {
+            let apt = apartment(models, &ApartmentConfig::default(), seed)?;
+            let rooms = apt.rooms.iter().map(|r| r.bounds).collect();
+            return Ok((apt.home, rooms));
+        }
         Ok(match &self.catalogue {
-            Some(c) => catalogue_room(c, &RoomConfig::catalogue(), seed)?,
-            None => generate_room(&self.config, seed)?,
+            Some(c) => (catalogue_room(c, &RoomConfig::catalogue(), seed)?, Vec::new()),
+            None => (generate_room(&self.config, seed)?, Vec::new()),
         })
     }
 
     /// Whether the rooms are furnished from the catalogue.
     pub fn furnished(&self) -> bool {
-        self.catalogue.is_some()
+        self.catalogue.is_some() || self.apartments.is_some()
     }
 }

@@ -7,8 +7,8 @@
 //! room; the others are a bedroom, a kitchen and a study. Each room is furnished by its own
 //! rules: a bed with its head to a wall between two bedside tables, and a wardrobe; a sofa, an
 //! armchair, a coffee table in front of the sofa, a TV unit, shelves and a plant; a dining
-//! table with chairs around it, partly under its top, and cabinets along the walls; a desk
-//! with a chair pushed under it and bookcases. Pieces keep clear of the doorways and of each
+//! table with chairs around it, their seats 5-15 cm under its top, and cabinets along the
+//! walls; a desk with a chair pushed under it and bookcases. Pieces keep clear of the doorways and of each
 //! other (but for a piece and what belongs to it), and the free floor of the whole apartment
 //! stays one connected piece for a body.
 
@@ -584,12 +584,11 @@ impl Furnisher<'_> {
     }
 
     /// Chairs around the table `of`: one or two along each long side, sometimes one at an
-    /// end, each facing the table and pushed under its top by 10-25 cm.
+    /// end, each facing the table and pushed under its top by 5-15 cm.
     fn around(&mut self, scene: &mut Scene, b: [f32; 4], of: usize) -> Result<()> {
-        let host = self.furniture[of].clone();
-        let [tw, td, _] = host.size;
-        // Sides in the table's frame: (offset direction, extent along the side).
-        let mut spots: Vec<(f32, f32, f32)> = Vec::new(); // (local x, local y, yaw in frame)
+        let tw = self.furniture[of].size[0];
+        // In the table's frame: (along its width, which side, the chair's turn).
+        let mut spots: Vec<(f32, f32, f32)> = Vec::new();
         let per_side = if tw >= 1.2 { 2 } else { 1 };
         for k in 0..per_side {
             let x = if per_side == 1 { 0.0 } else { (k as f32 - 0.5) * tw / 2.0 };
@@ -601,7 +600,6 @@ impl Furnisher<'_> {
         }
         for (lx, side, local_yaw) in spots {
             self.tucked_at(scene, b, of, lx, side, local_yaw)?;
-            let _ = td;
         }
         Ok(())
     }
@@ -627,7 +625,7 @@ impl Furnisher<'_> {
         };
         let host = self.furniture[of].clone();
         let size = self.catalogue.items[item].size;
-        let tuck = 0.1 + 0.15 * self.rng.next_f32();
+        let tuck = 0.05 + 0.1 * self.rng.next_f32();
         let (x, y) = if side == 0.0 {
             (lx * (host.size[0] / 2.0 + size[1] / 2.0 - tuck), 0.0)
         } else {

@@ -1,6 +1,7 @@
-//! The pairs every planner is run on: walks between standing places of the region, and a
-//! sit-down at every seat the region's sit-downs reach. One generator with options serves
-//! `room_nav`, the `room_planning` bench and `level`.
+//! The pairs every planner is run on: walks between standing places of the region (half of
+//! them from one room to another where the scene's rooms are known), and a sit-down at every
+//! seat the region's sit-downs reach. One generator with
+//! options serves `room_nav`, the `room_planning` bench and `level`.
 
 use crate::{AccessibleRegion, ExactField3, Result, RoomsError, SitDown};
 use envfield_affordance::{afford, sit_on, FilterConfig, PoseSequence, Support, WalkConfig};
@@ -45,7 +46,7 @@ pub struct Pair {
 /// How [`pairs`] draws its pairs. The default is `room_nav`'s: 4 walks, each start and goal
 /// drawn together, at least a metre apart along the exact field.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PairOptions {
+pub struct PairOptions<'a> {
     /// Walking pairs wanted (fewer come back when the draws do not find them).
     pub walks: usize,
     /// The least distance between a walk's start and goal along the exact field, metres.
@@ -58,14 +59,18 @@ pub struct PairOptions {
     /// The least height between a walk's start and goal, metres: a level's walks from one
     /// floor to another.
     pub rise: f32,
-    /// Add a sit-down pair at every seat of the room's known furniture that the region's
-    /// sit-downs reach.
+    /// Add a sit-down pair at every seat the region's sit-downs reach: every seat of the
+    /// room's known furniture, or, in a scene without a furniture list, every place the
+    /// region's sit-downs end (those within [`SEAT_APART`] of each other one seat).
     pub sit_downs: bool,
+    /// The scene's rooms (`[x_min, y_min, x_max, y_max]`, an apartment's): half of the walks
+    /// start in one and end in another. Empty: walks are drawn anywhere.
+    pub rooms: &'a [[f32; 4]],
     /// The seed of the draws and the gait.
     pub seed: u64,
 }
 
-impl Default for PairOptions {
+impl Default for PairOptions<'_> {
     fn default() -> Self {
         Self {
             walks: 4,
@@ -73,10 +78,15 @@ impl Default for PairOptions {
             goals: None,
             rise: 0.0,
             sit_downs: true,
+            rooms: &[],
             seed: 0,
         }
     }
 }
+
+/// Sit-downs of a scene without a furniture list that end within this of each other (metres,
+/// seated torsos) are one seat's.
+pub const SEAT_APART: f32 = 0.45;
 
 /// Whether a standing pose with its torso at `p` is supported and collision-free.
 fn stands(scene: &Scene, p: Point3m) -> bool {
@@ -129,8 +139,11 @@ pub fn pairs(
             kind: PairKind::Walk,
         })
         .collect();
-    if let Some(room) = room.filter(|_| options.sit_downs) {
-        out.extend(sit_down_pairs(room, region)?);
+    if options.sit_downs {
+        out.extend(match room {
+            Some(room) => sit_down_pairs(room, region)?,
+            None => seat_pairs(region)?,
+        });
     }
     Ok(out)
 }
@@ -156,6 +169,12 @@ fn walks_apart(
     }
     let count = options.walks;
     let mut rng = SplitMix64::new(options.seed ^ 0x9A1B);
+    let room_of = |p: Point3m| {
+        options
+            .rooms
+            .iter()
+            .position(|r| p[0] >= r[0] && p[0] <= r[2] && p[1] >= r[1] && p[1] <= r[3])
+    };
     let mut out = Vec::new();
     let mut tries = 0;
     while out.len() < count && tries < 100 * count {
@@ -164,6 +183,11 @@ fn walks_apart(
             standing[rng.below(standing.len())],
             standing[rng.below(standing.len())],
         );
+        // With rooms known, every other walk (the first included) goes from one to another.
+        let between = !options.rooms.is_empty() && out.len() % 2 == 0;
+        if between && (room_of(a).is_none() || room_of(a) == room_of(b)) {
+            continue;
+        }
         let d = ExactField3::new(region, b)?.value(a)?;
         if wanted(options, a, b, d) {
             out.push((a, b));
@@ -245,6 +269,29 @@ fn sit_down_pairs(room: &Room, region: &AccessibleRegion) -> Result<Vec<Pair>> {
                 kind: PairKind::Sit,
             });
         }
+    }
+    Ok(out)
+}
+
+/// A sit-down pair at every seat the region's sit-downs reach in a scene without a
+/// furniture list: the sit-downs in the order found, each ending farther than [`SEAT_APART`]
+/// from every one taken before.
+fn seat_pairs(region: &AccessibleRegion) -> Result<Vec<Pair>> {
+    let mut taken: Vec<Point3m> = Vec::new();
+    let mut out = Vec::new();
+    for sit in &region.sit_downs {
+        let p = Point3::from(sit.seated);
+        if taken.iter().any(|t| (Point3::from(*t) - p).norm() <= SEAT_APART) {
+            continue;
+        }
+        taken.push(sit.seated);
+        out.push(Pair {
+            start: sit.start,
+            goal: sit.seated,
+            sequence: sit.sequence()?,
+            repeat: false,
+            kind: PairKind::Sit,
+        });
     }
     Ok(out)
 }
