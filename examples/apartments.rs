@@ -175,7 +175,11 @@ fn table(args: &Args, vae: &Cvae, catalogue: &Catalogue) -> Result<()> {
             bar.inc(1);
         }
         bar.finish_and_clear();
-        let mut part = held_out.summary_json(args.first_seed);
+        let mut part = if args.timing {
+            serde_json::json!({})
+        } else {
+            held_out.summary_json(args.first_seed)
+        };
         let all_reached = extra
             .iter()
             .filter(|e| e["rooms_reached"] == e["rooms"])
@@ -194,6 +198,14 @@ fn table(args: &Args, vae: &Cvae, catalogue: &Catalogue) -> Result<()> {
     if !args.json {
         for half in ["evaluation", "training"] {
             let Some(p) = line.get(half) else { continue };
+            if args.timing {
+                eprintln!(
+                    "{half}: region from the file: median {:.1} s, worst {:.1} s",
+                    p["region_from_file_median_ms"].as_f64().unwrap_or(f64::NAN) / 1e3,
+                    p["region_from_file_worst_ms"].as_f64().unwrap_or(f64::NAN) / 1e3,
+                );
+                continue;
+            }
             eprintln!(
                 "{half}: implausible {:.2}% (worst {:.2}%), seats {:.1}% (least {:.0}%), beds {:.1}%, \
                  floor {:.1}%, every room reached in {}/{}; controls: untrained implausible \
