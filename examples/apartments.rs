@@ -40,7 +40,9 @@ enum Which {
 }
 
 #[derive(Parser)]
-#[command(about = "Apartments furnished by other modellers: the accessible region's held-out table")]
+#[command(
+    about = "Apartments furnished by other modellers: the accessible region's held-out table"
+)]
 struct Args {
     /// The contributed furniture libraries (default: data/sweethome3d-contrib, fetched by
     /// scripts/fetch_sweethome3d_contrib.sh).
@@ -117,7 +119,8 @@ fn table(args: &Args, vae: &Cvae, catalogue: &Catalogue) -> Result<()> {
     let mut line = serde_json::json!({"first_seed": args.first_seed, "count": args.count});
     for &half in halves {
         let models = catalogue.only(half);
-        let style = ProgressStyle::with_template("{msg:>24} {bar:30} {pos}/{len} {elapsed_precise}")?;
+        let style =
+            ProgressStyle::with_template("{msg:>24} {bar:30} {pos}/{len} {elapsed_precise}")?;
         let bar = ProgressBar::new(args.count)
             .with_style(style)
             .with_message(format!("{half:?} apartments"));
@@ -139,7 +142,10 @@ fn table(args: &Args, vae: &Cvae, catalogue: &Catalogue) -> Result<()> {
             let twin = draw(&untrained, &apt.home.scene, n, seed, Gate::Off)?;
             let uniform = uniform_in_room(&apt.home, 2.5, n, seed);
             let region = held_out.add(&apt.home, &drawn, &twin, &uniform, &config)?;
-            let reached = region.as_ref().map(|r| rooms_reached(&apt, r)).unwrap_or_default();
+            let reached = region
+                .as_ref()
+                .map(|r| rooms_reached(&apt, r))
+                .unwrap_or_default();
             let file = from_file(&apt, vae, seed, scratch.path())?;
             let q = held_out.ours.last().expect("just added");
             if !args.json {
@@ -244,9 +250,16 @@ fn one(args: &Args, vae: &Cvae, catalogue: &Catalogue, seed: u64) -> Result<()> 
     // their heights above the floor.
     let mut over = std::collections::BTreeMap::<String, Vec<f32>>::new();
     for c in region.voxel_centres() {
-        if let Some(f) = apt.home.furniture.iter().find(|f| !f.kind.is_seat() && f.covers(c[0], c[1])) {
+        if let Some(f) = apt
+            .home
+            .furniture
+            .iter()
+            .find(|f| !f.kind.is_seat() && f.covers(c[0], c[1]))
+        {
             let name = apt.home.scene.objects()[f.object].name.clone();
-            over.entry(name).or_default().push((c[2] * 100.0).round() / 100.0);
+            over.entry(name)
+                .or_default()
+                .push((c[2] * 100.0).round() / 100.0);
         }
     }
     // Each seat: where a body sits on it (the sit-down's last torso) and how far the nearest
@@ -254,14 +267,18 @@ fn one(args: &Args, vae: &Cvae, catalogue: &Catalogue, seed: u64) -> Result<()> 
     let centres = region.voxel_centres();
     let mut seats = Vec::new();
     for f in apt.home.furniture.iter().filter(|f| f.kind.is_seat()) {
-        let Some(seq) = envfield::affordance::sit_on(f)? else { continue };
+        let Some(seq) = envfield::affordance::sit_on(f)? else {
+            continue;
+        };
         let t = seq.frames.last().expect("frames").torso();
         let near = centres
             .iter()
             .map(|c| ((c[0] - t.x).powi(2) + (c[1] - t.y).powi(2) + (c[2] - t.z).powi(2)).sqrt())
             .fold(f32::INFINITY, f32::min);
         let name = apt.home.scene.objects()[f.object].name.clone();
-        seats.push(serde_json::json!({"seat": name, "torso": [t.x, t.y, t.z], "nearest_voxel_m": near}));
+        seats.push(
+            serde_json::json!({"seat": name, "torso": [t.x, t.y, t.z], "nearest_voxel_m": near}),
+        );
     }
     let summary = serde_json::json!({
         "seed": seed,
@@ -294,8 +311,8 @@ fn main() -> Result<()> {
             "no contributed furniture: run scripts/fetch_sweethome3d_contrib.sh (or pass --furniture)",
         )?,
     };
-    let catalogue =
-        Catalogue::read(&dir).with_context(|| format!("reading the furniture at {}", dir.display()))?;
+    let catalogue = Catalogue::read(&dir)
+        .with_context(|| format!("reading the furniture at {}", dir.display()))?;
     let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("models/vae_gated.safetensors");
     let file = args.vae.clone().unwrap_or(shipped);
     let vae = Cvae::load(&file).with_context(|| format!("loading the VAE {}", file.display()))?;

@@ -127,7 +127,8 @@ fn room_field(
     let store = FieldStore {
         named: args.field.clone().filter(|_| k == 0),
         kept: args.fields.clone().filter(|_| generated),
-        shipped: Some(shipped).filter(|_| generated && !args.scene.catalogue && !args.scene.apartment),
+        shipped: Some(shipped)
+            .filter(|_| generated && !args.scene.catalogue && !args.scene.apartment),
     };
     let style = ProgressStyle::with_template("{msg:>24} {bar:30} {pos}/{len} (eta {eta})")?;
     let bar = ProgressBar::new(args.field_steps).with_style(style);
@@ -212,7 +213,9 @@ fn main() -> Result<()> {
     let (mut region_s, mut memory) = (Vec::new(), Vec::new());
     for k in 0..args.rooms {
         let seed = args.seed + k;
-        let (scene, generated, zones) = args.scene.scene_in_rooms(&rooms, seed, Some(args.samples))?;
+        let (scene, generated, zones) =
+            args.scene
+                .scene_in_rooms(&rooms, seed, Some(args.samples))?;
         let t = Instant::now();
         let region = sample_region(&vae, &scene, args.samples, seed)?;
         region_s.push(t.elapsed().as_secs_f64());

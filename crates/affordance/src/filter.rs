@@ -21,8 +21,8 @@
 //! for it.
 
 use crate::{
-    bones_clear, check_pose, lie_down, pose_supported, sit_down, standing_pose, AffordanceConfig, AffordanceError,
-    Joint, LieConfig, Pose, Result, SitConfig, Support,
+    bones_clear, check_pose, lie_down, pose_supported, sit_down, standing_pose, AffordanceConfig,
+    AffordanceError, Joint, LieConfig, Pose, Result, SitConfig, Support,
 };
 use envfield_scene::nalgebra::{Point3, Vector3};
 use envfield_scene::{Scene, SignedDistance};

@@ -4,9 +4,9 @@ use std::f32::consts::FRAC_PI_2;
 
 use approx::assert_relative_eq;
 use envfield_affordance::{
-    align_in_scene, align_to_trajectory, check_pose, check_sequence, get_up, lie_down, sit_down,
-    standing_pose, walk, AffordanceConfig, AlignConfig, Joint, LieConfig, PoseSequence, SitConfig,
-    Support, WalkConfig,
+    afford, align_in_scene, align_to_trajectory, check_pose, check_sequence, get_up, lie_down,
+    plausible, pose_supported, sit_down, standing_pose, walk, AffordanceConfig, AlignConfig,
+    FilterConfig, Joint, LieConfig, Pose, PoseSequence, SitConfig, Support, WalkConfig,
 };
 use envfield_scene::{ObjectKind, Primitive, Scene, SceneObject};
 use nalgebra::{Isometry3, Point3, Vector3};
@@ -454,4 +454,117 @@ fn a_foot_on_an_open_sheet_rests_on_it() {
             .unwrap()
             .supported
     );
+}
+
+/// The support joints alone decide support: `pose_supported` says what `check_pose` says, for
+/// poses of every kind placed all over the room (on the floor, the chair, the table, the bed,
+/// in the air and sunk).
+#[test]
+fn pose_supported_agrees_with_check_pose() {
+    let scene = room();
+    let cfg = AffordanceConfig::default();
+    let sit = sit_down(&SitConfig::default()).unwrap();
+    let lie = lie_down(&LieConfig::default()).unwrap();
+    let kinds = [
+        (standing_pose(), Support::Standing),
+        (*sit.frames.last().unwrap(), Support::Sitting),
+        (*lie.frames.last().unwrap(), Support::Lying),
+    ];
+    let (mut agree, mut supported) = (0, 0);
+    for (pose, support) in kinds {
+        let t = pose.torso();
+        for i in 0..20 {
+            for j in 0..20 {
+                for k in 0..6 {
+                    let to = Vector3::new(
+                        0.5 * i as f32 - t.x,
+                        0.5 * j as f32 - t.y,
+                        0.15 * k as f32 - 0.2,
+                    );
+                    let placed = pose
+                        .rotated_about_z(0.3 * (i + j) as f32, &t)
+                        .translated(&to);
+                    let full = check_pose(&scene, &placed, support, &cfg).unwrap();
+                    let quick = pose_supported(&scene, &placed, support, &cfg).unwrap();
+                    assert_eq!(quick, full.supported, "{support:?} at {to:?}");
+                    agree += 1;
+                    supported += usize::from(quick);
+                }
+            }
+        }
+    }
+    assert!(
+        supported > 50 && supported < agree - 50,
+        "{supported} of {agree}"
+    );
+}
+
+/// The torso filter skips a pose kind when none of its headings can rest (one distance read
+/// per support joint): what it finds supported is what trying every kind at every heading
+/// finds, at torsos all over the room.
+#[test]
+fn the_filters_shortcut_finds_what_every_try_finds() {
+    let scene = room();
+    let config = FilterConfig::default().in_place();
+    let centre = |p: Pose| {
+        let t = p.torso();
+        p.translated(&Vector3::new(-t.x, -t.y, -t.z))
+    };
+    let low = sit_down(&SitConfig {
+        seat_height: 0.32,
+        ..SitConfig::default()
+    })
+    .unwrap();
+    let kit = [
+        (centre(standing_pose()), Support::Standing),
+        (
+            centre(
+                *sit_down(&SitConfig::default())
+                    .unwrap()
+                    .frames
+                    .last()
+                    .unwrap(),
+            ),
+            Support::Sitting,
+        ),
+        (centre(*low.frames.last().unwrap()), Support::Sitting),
+        (
+            centre(
+                *lie_down(&LieConfig::default())
+                    .unwrap()
+                    .frames
+                    .last()
+                    .unwrap(),
+            ),
+            Support::Lying,
+        ),
+    ];
+    let mut found = 0;
+    for i in 0..40 {
+        for j in 0..40 {
+            for k in 0..8 {
+                let p = [0.25 * i as f32, 0.25 * j as f32, 0.15 * k as f32 + 0.3];
+                let got = afford(&scene, p, &config).unwrap().supported;
+                let mut want = None;
+                'tries: for (pose, support) in kit {
+                    for y in 0..config.yaws {
+                        let yaw = y as f32 * std::f32::consts::TAU / config.yaws as f32;
+                        let placed = pose
+                            .rotated_about_z(yaw, &Point3::origin())
+                            .translated(&Vector3::from(p));
+                        let r = check_pose(&scene, &placed, support, &config.affordance).unwrap();
+                        if r.supported
+                            && plausible(&scene, &placed, support, &config.affordance).unwrap()
+                        {
+                            want = Some(support);
+                            break 'tries;
+                        }
+                    }
+                }
+                assert_eq!(got, want, "at {p:?}");
+                found += usize::from(got.is_some());
+            }
+        }
+    }
+    assert!(found > 100, "{found} supported torsos");
 }

@@ -65,9 +65,8 @@ impl SceneArgs {
     /// one that cannot be read.
     pub fn rooms(&self, config: RoomConfig) -> Result<RoomMaker> {
         let apartments = if self.apartment {
-            let dir = Catalogue::find_contrib().context(
-                "no contributed furniture: run scripts/fetch_sweethome3d_contrib.sh",
-            )?;
+            let dir = Catalogue::find_contrib()
+                .context("no contributed furniture: run scripts/fetch_sweethome3d_contrib.sh")?;
             let read = Catalogue::read(&dir)
                 .with_context(|| format!("reading the furniture at {}", dir.display()))?;
             Some(read.only(Half::Evaluation))
@@ -161,7 +160,10 @@ impl RoomMaker {
             return Ok((apt.home, rooms));
         }
         Ok(match &self.catalogue {
-            Some(c) => (catalogue_room(c, &RoomConfig::catalogue(), seed)?, Vec::new()),
+            Some(c) => (
+                catalogue_room(c, &RoomConfig::catalogue(), seed)?,
+                Vec::new(),
+            ),
             None => (generate_room(&self.config, seed)?, Vec::new()),
         })
     }

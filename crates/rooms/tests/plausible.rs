@@ -7,6 +7,7 @@ use envfield_affordance::{
     bones_clear, check_pose, sit_down, standing_pose, AffordanceConfig, Pose, SitConfig, Support,
 };
 use envfield_plan::space3::straight_line;
+use envfield_rooms::harness::{pairs, PairKind, PairOptions};
 use envfield_rooms::nav::clear_beneath;
 use envfield_rooms::quality::implausible;
 use envfield_rooms::{AccessibleRegion, PoseFilter, RegionConfig, SitDown};
@@ -357,4 +358,53 @@ fn a_sit_down_played_in_place_follows_where_its_torso_is() {
         seq.frames.len(),
         off(by_steps.frames.last().unwrap())
     );
+}
+
+/// In a scene read without its furniture list, the sit-down pairs come from the region's own
+/// sit-downs: one a seat, each starting standing in the region and ending seated in it.
+#[test]
+fn a_scene_without_a_furniture_list_still_gets_its_sit_downs() {
+    let (room, region, _, _) = seat_region();
+    let options = PairOptions {
+        walks: 0,
+        ..PairOptions::default()
+    };
+    let unknown = pairs(None, &room.scene, &region, &options).unwrap();
+    let known = pairs(Some(&room), &room.scene, &region, &options).unwrap();
+    assert_eq!(unknown.len(), 1, "one seat, one sit-down pair");
+    assert_eq!(known.len(), 1);
+    for p in &unknown {
+        assert_eq!(p.kind, PairKind::Sit);
+        assert!(region.contains(p.start) && region.contains(p.goal), "{p:?}");
+        assert!(region.sit_downs.iter().any(|s| s.seated == p.goal));
+    }
+    // Without sit-downs asked for, none.
+    let none = PairOptions {
+        sit_downs: false,
+        ..options
+    };
+    assert!(pairs(None, &room.scene, &region, &none).unwrap().is_empty());
+}
+
+/// With the scene's rooms known, every other walk (the first included) goes from one room to
+/// another.
+#[test]
+fn walks_go_between_rooms_when_the_rooms_are_known() {
+    let (room, region, _, _) = seat_region();
+    let halves = [[0.0, 0.0, 2.0, 4.0], [2.0, 0.0, 4.0, 4.0]];
+    let options = PairOptions {
+        walks: 6,
+        sit_downs: false,
+        rooms: &halves,
+        seed: 5,
+        ..PairOptions::default()
+    };
+    let walks = pairs(None, &room.scene, &region, &options).unwrap();
+    assert_eq!(walks.len(), 6);
+    let side = |p: [f32; 3]| p[0] < 2.0;
+    for (k, w) in walks.iter().enumerate() {
+        if k % 2 == 0 {
+            assert_ne!(side(w.start), side(w.goal), "walk {k}: {w:?}");
+        }
+    }
 }

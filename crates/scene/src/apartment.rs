@@ -56,7 +56,9 @@ impl Default for ApartmentConfig {
 
 impl ApartmentConfig {
     fn validate(&self) -> Result<()> {
-        let range = |r: [f32; 2], min: f32| r[0].is_finite() && r[1].is_finite() && min <= r[0] && r[0] <= r[1];
+        let range = |r: [f32; 2], min: f32| {
+            r[0].is_finite() && r[1].is_finite() && min <= r[0] && r[0] <= r[1]
+        };
         let ok = (2..=4).contains(&self.rooms[0])
             && self.rooms[0] <= self.rooms[1]
             && self.rooms[1] <= 4
@@ -191,9 +193,15 @@ pub fn apartment(catalogue: &Catalogue, config: &ApartmentConfig, seed: u64) -> 
         let (lo, hi) = if along_x { (r[1], r[3]) } else { (r[0], r[2]) };
         let c = lo + (hi - lo) * range(&mut rng, [0.4, 0.6]);
         let (a, b) = if along_x {
-            ([r[0], r[1], r[2], c - t / 2.0], [r[0], c + t / 2.0, r[2], r[3]])
+            (
+                [r[0], r[1], r[2], c - t / 2.0],
+                [r[0], c + t / 2.0, r[2], r[3]],
+            )
         } else {
-            ([r[0], r[1], c - t / 2.0, r[3]], [c + t / 2.0, r[1], r[2], r[3]])
+            (
+                [r[0], r[1], c - t / 2.0, r[3]],
+                [c + t / 2.0, r[1], r[2], r[3]],
+            )
         };
         cuts.push(Cut {
             along_x,
@@ -284,12 +292,20 @@ fn place_doors(
         let overlap = |lo1: f32, hi1: f32, lo2: f32, hi2: f32| (lo1.max(lo2), hi1.min(hi2));
         let wide = |(lo, hi): (f32, f32)| hi - lo >= widest + 0.4;
         if near(p[2], q[0]) || near(q[2], p[0]) {
-            let x = if near(p[2], q[0]) { p[2] + t / 2.0 } else { q[2] + t / 2.0 };
+            let x = if near(p[2], q[0]) {
+                p[2] + t / 2.0
+            } else {
+                q[2] + t / 2.0
+            };
             let o = overlap(p[1], p[3], q[1], q[3]);
             return wide(o).then_some((false, x, o.0, o.1));
         }
         if near(p[3], q[1]) || near(q[3], p[1]) {
-            let y = if near(p[3], q[1]) { p[3] + t / 2.0 } else { q[3] + t / 2.0 };
+            let y = if near(p[3], q[1]) {
+                p[3] + t / 2.0
+            } else {
+                q[3] + t / 2.0
+            };
             let o = overlap(p[0], p[2], q[0], q[2]);
             return wide(o).then_some((true, y, o.0, o.1));
         }
@@ -349,10 +365,12 @@ fn shell(w: f32, d: f32, cuts: &[Cut], doors: &[Door], config: &ApartmentConfig)
             continue; // the outer walls, added above
         }
         let (cx, cy) = ((x0 + x1) / 2.0, (y0 + y1) / 2.0);
-        scene.add(SceneObject::new(format!("wall {k}"), ObjectKind::Wall).with(
-            Primitive::cuboid([x1 - x0, y1 - y0, h]),
-            at(cx, cy, h / 2.0, 0.0),
-        )?)?;
+        scene.add(
+            SceneObject::new(format!("wall {k}"), ObjectKind::Wall).with(
+                Primitive::cuboid([x1 - x0, y1 - y0, h]),
+                at(cx, cy, h / 2.0, 0.0),
+            )?,
+        )?;
     }
     Ok(scene)
 }
@@ -553,7 +571,14 @@ impl Furnisher<'_> {
     }
 
     /// A piece of `role` against the same wall as piece `of`, beside its back on `side`.
-    fn beside(&mut self, scene: &mut Scene, b: [f32; 4], of: usize, role: Role, side: f32) -> Result<()> {
+    fn beside(
+        &mut self,
+        scene: &mut Scene,
+        b: [f32; 4],
+        of: usize,
+        role: Role,
+        side: f32,
+    ) -> Result<()> {
         let Some(item) = self.pick(role) else {
             return Ok(());
         };
@@ -563,7 +588,10 @@ impl Furnisher<'_> {
         // In the host's frame: beside it (x), backs level with each other (y).
         let lx = side * (host.size[0] / 2.0 + size[0] / 2.0 + 0.03);
         let ly = -host.size[1] / 2.0 + size[1] / 2.0;
-        let center = [host.center[0] + c * lx - s * ly, host.center[1] + s * lx + c * ly];
+        let center = [
+            host.center[0] + c * lx - s * ly,
+            host.center[1] + s * lx + c * ly,
+        ];
         self.put(scene, b, item, center, host.yaw, Some(of))?;
         Ok(())
     }
@@ -591,7 +619,11 @@ impl Furnisher<'_> {
         let mut spots: Vec<(f32, f32, f32)> = Vec::new();
         let per_side = if tw >= 1.2 { 2 } else { 1 };
         for k in 0..per_side {
-            let x = if per_side == 1 { 0.0 } else { (k as f32 - 0.5) * tw / 2.0 };
+            let x = if per_side == 1 {
+                0.0
+            } else {
+                (k as f32 - 0.5) * tw / 2.0
+            };
             spots.push((x, -1.0, 0.0)); // south side, facing +y
             spots.push((x, 1.0, PI)); // north side, facing -y
         }
@@ -633,7 +665,10 @@ impl Furnisher<'_> {
         };
         // A desk's front faces +y in its frame, so its chair comes from +y facing -y.
         let (s, c) = host.yaw.sin_cos();
-        let center = [host.center[0] + c * x - s * y, host.center[1] + s * x + c * y];
+        let center = [
+            host.center[0] + c * x - s * y,
+            host.center[1] + s * x + c * y,
+        ];
         self.put(scene, b, item, center, host.yaw + local_yaw, Some(of))?;
         Ok(())
     }
@@ -653,8 +688,10 @@ impl Furnisher<'_> {
     ) -> Result<Option<usize>> {
         let it = &self.catalogue.items[item];
         let f = footprint(center, yaw, it.size);
-        let inside =
-            f[0] >= b[0] - 1e-3 && f[1] >= b[1] - 1e-3 && f[2] <= b[2] + 1e-3 && f[3] <= b[3] + 1e-3;
+        let inside = f[0] >= b[0] - 1e-3
+            && f[1] >= b[1] - 1e-3
+            && f[2] <= b[2] + 1e-3
+            && f[3] <= b[3] + 1e-3;
         if !inside {
             return Ok(None);
         }
@@ -719,7 +756,12 @@ impl Furnisher<'_> {
         let rects = self
             .walls
             .iter()
-            .chain(self.taken.iter().filter(|(_, g)| g.is_some()).map(|(r, _)| r))
+            .chain(
+                self.taken
+                    .iter()
+                    .filter(|(_, g)| g.is_some())
+                    .map(|(r, _)| r),
+            )
             .chain([extra]);
         for r in rects {
             let lo = |v: f32| ((v - BODY) / CELL).floor().max(0.0) as usize;

@@ -162,8 +162,18 @@ fn contrib_role(name: &str, category: &str, size: [f32; 3], seat: Option<f32>) -
     let has = |words: &[&str]| words.iter().any(|w| n.contains(w));
     let height = size[2];
     let left_out = [
-        "bunk", "loft", "mezzanine", "crib", "baby", "child", "corner", "bar ", "island",
-        "hanging", "dressing", "freezer",
+        "bunk",
+        "loft",
+        "mezzanine",
+        "crib",
+        "baby",
+        "child",
+        "corner",
+        "bar ",
+        "island",
+        "hanging",
+        "dressing",
+        "freezer",
     ];
     if has(&left_out) {
         return None;
@@ -522,7 +532,9 @@ fn read_library(
             continue;
         };
         let size = [w / 100.0, d / 100.0, h / 100.0];
-        let drop_on_top = number("dropOnTopElevation")?.filter(|v| *v > 0.0).map(|v| v / 100.0);
+        let drop_on_top = number("dropOnTopElevation")?
+            .filter(|v| *v > 0.0)
+            .map(|v| v / 100.0);
         let role = if default {
             default_role(name)
         } else {

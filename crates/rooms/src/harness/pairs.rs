@@ -281,7 +281,10 @@ fn seat_pairs(region: &AccessibleRegion) -> Result<Vec<Pair>> {
     let mut out = Vec::new();
     for sit in &region.sit_downs {
         let p = Point3::from(sit.seated);
-        if taken.iter().any(|t| (Point3::from(*t) - p).norm() <= SEAT_APART) {
+        if taken
+            .iter()
+            .any(|t| (Point3::from(*t) - p).norm() <= SEAT_APART)
+        {
             continue;
         }
         taken.push(sit.seated);

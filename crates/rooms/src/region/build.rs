@@ -2,13 +2,13 @@
 //! voxels, the gaps between them closed, the sit-downs laid in, the largest connected set.
 
 use super::{AccessibleRegion, BuildTimes, SitDown};
-use std::time::Instant;
 use crate::{Result, RoomsError};
 use envfield_affordance::Pose;
 use envfield_grid::Point3m;
 use envfield_grid::{Cell3, Grid3};
 use envfield_scene::nalgebra::Point3;
 use envfield_scene::{Scene, VoxelFrame};
+use std::time::Instant;
 
 /// The six face neighbours of a voxel.
 const FACES: [(isize, isize, isize); 6] = [
