@@ -43,9 +43,7 @@ fn bench_apartment_region(c: &mut Criterion) {
         b.iter(|| black_box(draw_torsos(&vae, &scene, &options, None).expect("samples")))
     });
     group.bench_function("region_from_samples", |b| {
-        b.iter(|| {
-            black_box(AccessibleRegion::from_drawn(&scene, &drawn, &config).expect("region"))
-        })
+        b.iter(|| black_box(AccessibleRegion::from_drawn(&scene, &drawn, &config).expect("region")))
     });
     group.finish();
 }

@@ -280,6 +280,15 @@ fn one(args: &Args, vae: &Cvae, catalogue: &Catalogue, seed: u64) -> Result<()> 
             serde_json::json!({"seat": name, "torso": [t.x, t.y, t.z], "nearest_voxel_m": near}),
         );
     }
+    let reached = rooms_reached(&apt, &region);
+    for (room, ok) in apt.rooms.iter().zip(&reached) {
+        if !ok {
+            eprintln!(
+                "warning: the {:?} at {:?} is out of the region: no body passes its door",
+                room.kind, room.bounds
+            );
+        }
+    }
     let summary = serde_json::json!({
         "seed": seed,
         "seats": seats,
@@ -289,7 +298,7 @@ fn one(args: &Args, vae: &Cvae, catalogue: &Catalogue, seed: u64) -> Result<()> 
         "doors": apt.doors,
         "furniture": apt.items.iter().map(|&i| &models.items[i].name).collect::<Vec<_>>(),
         "region_voxels": region.grid.free_count(),
-        "rooms_reached": rooms_reached(&apt, &region),
+        "rooms_reached": reached,
         "region_ms": region.times,
     });
     envfield::grid::write_atomic(
