@@ -658,3 +658,33 @@ fn level_walks_up_a_ramp_and_refuses_a_level_of_one_floor() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `apartments` refuses a count out of range, a furniture folder that holds none, and a VAE
+/// file that is not one, naming what is wrong.
+#[test]
+fn apartments_refuses_bad_counts_folders_and_weights() {
+    let Some(apts) = example("apartments") else {
+        return;
+    };
+    let dir = scratch("apartments");
+    refuses(run(&apts, &["--count", "0"]), "--count");
+    refuses(run(&apts, &["--count", "1001"]), "--count");
+    let empty = dir.to_string_lossy().into_owned();
+    refuses(
+        run(&apts, &["--furniture", &empty]),
+        "reading the furniture",
+    );
+    let bad = write(&dir, "vae.safetensors", "not weights");
+    let models = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/sweethome3d-contrib");
+    if models.is_dir() {
+        refuses(
+            run(
+                &apts,
+                &["--furniture", &models.to_string_lossy(), "--vae", &bad],
+            ),
+            "vae.safetensors",
+        );
+    }
+    refuses_usage(run(&apts, &["--half", "both-and-more"]), "--half");
+    std::fs::remove_dir_all(&dir).ok();
+}
