@@ -306,21 +306,41 @@ fn afford_at(scene: &Scene, p: [f32; 3], config: &FilterConfig, kit: &Kit) -> Re
         if !pose_supported(scene, &placed, support, &config.affordance)? {
             continue;
         }
-        let r = check_pose(scene, &placed, support, &config.affordance)?;
-        if !r.supported
-            || (config.plausible && !plausible(scene, &placed, support, &config.affordance)?)
-        {
-            continue;
-        }
+        let valid = if config.plausible && bones_decide(&config.affordance) {
+            // Every joint but a support joint ends a bone the plausibility rule keeps at
+            // least LIMB - BONE_STEP from geometry, so a plausible pose collides nowhere; a
+            // lying body's neck alone lies between two support joints and is read.
+            if !plausible(scene, &placed, support, &config.affordance)? {
+                continue;
+            }
+            support != Support::Lying
+                || scene.distance_at(&placed.joints[Joint::Neck.index()])?
+                    >= -config.affordance.collision_margin
+        } else {
+            let r = check_pose(scene, &placed, support, &config.affordance)?;
+            if !r.supported
+                || (config.plausible && !plausible(scene, &placed, support, &config.affordance)?)
+            {
+                continue;
+            }
+            r.valid()
+        };
         if out.supported.is_none() {
             out.supported = Some(support);
         }
-        if r.valid() {
+        if valid {
             out.valid = Some(support);
             break;
         }
     }
     Ok(out)
+}
+
+/// Whether the plausibility rule's bones decide collisions under `affordance`: a joint is
+/// in collision below `-collision_margin`, and a plausible pose keeps each joint that ends a
+/// bone free of its support joints at least `LIMB - BONE_STEP` from every surface.
+fn bones_decide(affordance: &AffordanceConfig) -> bool {
+    -affordance.collision_margin <= LIMB - BONE_STEP
 }
 
 /// Sampling step along a bone, metres.
