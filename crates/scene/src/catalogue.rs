@@ -459,9 +459,12 @@ impl Catalogue {
     }
 }
 
+/// One catalogue piece's fields: each key's line number and value.
+type Fields = HashMap<String, (usize, String)>;
+
 /// A properties file's `key#N=value` entries by N, each with its line: Java properties,
 /// ISO 8859-1, backslash-continued lines joined.
-fn properties(path: &Path) -> Result<Vec<(usize, HashMap<String, (usize, String)>)>> {
+fn properties(path: &Path) -> Result<Vec<(usize, Fields)>> {
     let text: String = std::fs::read(path)
         .map_err(|source| SceneError::Io {
             path: path.to_path_buf(),
@@ -470,7 +473,7 @@ fn properties(path: &Path) -> Result<Vec<(usize, HashMap<String, (usize, String)
         .into_iter()
         .map(char::from)
         .collect();
-    let mut fields: HashMap<usize, HashMap<String, (usize, String)>> = HashMap::new();
+    let mut fields: HashMap<usize, Fields> = HashMap::new();
     let mut lines = text.lines().enumerate();
     while let Some((n, line)) = lines.next() {
         let mut line = line.trim_start().to_string();

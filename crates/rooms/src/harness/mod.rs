@@ -13,7 +13,7 @@ mod planner;
 mod run;
 mod scoring;
 
-pub use pairs::{pairs, standing_places, Pair, PairKind, PairOptions};
+pub use pairs::{pairs, standing_places, Pair, PairKind, PairOptions, SEAT_APART};
 pub use planner::{
     learned_table, FieldKind, FloorPlanner, PairSetup, RoomPlanner, EXACT_BAND, NEAR_STALL,
     PIN_RADIUS,
