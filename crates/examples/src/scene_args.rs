@@ -31,7 +31,7 @@ pub struct SceneArgs {
     /// Apartments of 2-4 rooms furnished with the evaluation half of the contributed models
     /// (models by other modellers than the default catalogue's, never trained or tuned on;
     /// scripts/fetch_sweethome3d_contrib.sh fetches them) instead of single rooms.
-    #[arg(long, conflicts_with = "catalogue")]
+    #[arg(long, conflicts_with_all = ["catalogue", "scene"])]
     pub apartment: bool,
 }
 

@@ -172,63 +172,29 @@ pub fn apartment(catalogue: &Catalogue, config: &ApartmentConfig, seed: u64) -> 
         }
     }
     let mut rng = SplitMix64::new(seed ^ 0xA9A7_0000);
-    let range = |rng: &mut SplitMix64, r: [f32; 2]| r[0] + (r[1] - r[0]) * rng.next_f32();
-    let n = config.rooms[0] + rng.below(config.rooms[1] - config.rooms[0] + 1);
-    let area = range(&mut rng, config.area);
-    let aspect = range(&mut rng, [1.0, 1.6]);
-    let (w, d) = ((area * aspect).sqrt(), (area / aspect).sqrt());
     let t = config.wall_thickness;
-
-    // Rooms: cut the largest along its longer side until there are n.
-    let mut rects = vec![[0.0, 0.0, w, d]];
-    let mut cuts = Vec::new();
-    while rects.len() < n {
-        let (i, r) = rects
-            .iter()
-            .enumerate()
-            .max_by(|a, b| area_of(a.1).total_cmp(&area_of(b.1)))
-            .map(|(i, r)| (i, *r))
-            .expect("one room at least");
-        let along_x = r[3] - r[1] > r[2] - r[0]; // a deep room is cut by a wall along x
-        let (lo, hi) = if along_x { (r[1], r[3]) } else { (r[0], r[2]) };
-        let c = lo + (hi - lo) * range(&mut rng, [0.4, 0.6]);
-        let (a, b) = if along_x {
-            (
-                [r[0], r[1], r[2], c - t / 2.0],
-                [r[0], c + t / 2.0, r[2], r[3]],
-            )
-        } else {
-            (
-                [r[0], r[1], c - t / 2.0, r[3]],
-                [c + t / 2.0, r[1], r[2], r[3]],
-            )
-        };
-        cuts.push(Cut {
-            along_x,
-            at: c,
-            from: if along_x { r[0] } else { r[1] },
-            to: if along_x { r[2] } else { r[3] },
-        });
-        rects[i] = a;
-        rects.push(b);
+    // A plan whose rooms a door cannot all join (a shared wall too short) is drawn again.
+    let mut plan = None;
+    for _ in 0..LAYOUT_TRIES {
+        let drawn = layout(config, &mut rng);
+        if drawn.doors.len() + 1 == drawn.rooms.len() {
+            plan = Some(drawn);
+            break;
+        }
     }
-    // The largest room is the living room; the others what is left, in a random order.
-    let mut order: Vec<usize> = (0..n).collect();
-    order.sort_by(|&a, &b| area_of(&rects[b]).total_cmp(&area_of(&rects[a])));
-    let mut others = vec![RoomType::Bedroom, RoomType::Kitchen, RoomType::Study];
-    others.truncate(n - 1);
-    shuffle(&mut others, &mut rng);
-    let mut kinds = vec![RoomType::Living; n];
-    for (k, &room) in order.iter().enumerate().skip(1) {
-        kinds[room] = others[k - 1];
-    }
-    let rooms: Vec<ApartmentRoom> = rects
-        .iter()
-        .zip(&kinds)
-        .map(|(&bounds, &kind)| ApartmentRoom { kind, bounds })
-        .collect();
-
-    let doors = place_doors(&rooms, config, &mut rng, order[0]);
+    let Layout {
+        w,
+        d,
+        rooms,
+        cuts,
+        doors,
+    } = plan.ok_or_else(|| {
+        SceneError::InvalidInput(format!(
+            "apartment: no plan of {LAYOUT_TRIES} drawn joins every room by a door of \
+             {:?} m (seed {seed})",
+            config.door_width
+        ))
+    })?;
     let mut scene = shell(w, d, &cuts, &doors, config)?;
 
     // Furniture, room by room.
@@ -270,6 +236,87 @@ pub fn apartment(catalogue: &Catalogue, config: &ApartmentConfig, seed: u64) -> 
         doors,
         items,
     })
+}
+
+/// How many plans [`apartment`] draws before it gives up on one whose rooms doors join.
+const LAYOUT_TRIES: usize = 50;
+
+/// A plan: the outer size, the rooms, the cuts' walls and the doors.
+struct Layout {
+    w: f32,
+    d: f32,
+    rooms: Vec<ApartmentRoom>,
+    cuts: Vec<Cut>,
+    doors: Vec<Door>,
+}
+
+/// Draws a plan: rooms cut from the rectangle, their types, and a door on every edge of a
+/// tree over their shared walls (fewer when a room shares no wall long enough).
+fn layout(config: &ApartmentConfig, rng: &mut SplitMix64) -> Layout {
+    let range = |rng: &mut SplitMix64, r: [f32; 2]| r[0] + (r[1] - r[0]) * rng.next_f32();
+    let n = config.rooms[0] + rng.below(config.rooms[1] - config.rooms[0] + 1);
+    let area = range(rng, config.area);
+    let aspect = range(rng, [1.0, 1.6]);
+    let (w, d) = ((area * aspect).sqrt(), (area / aspect).sqrt());
+    let t = config.wall_thickness;
+
+    // Rooms: cut the largest along its longer side until there are n.
+    let mut rects = vec![[0.0, 0.0, w, d]];
+    let mut cuts = Vec::new();
+    while rects.len() < n {
+        let (i, r) = rects
+            .iter()
+            .enumerate()
+            .max_by(|a, b| area_of(a.1).total_cmp(&area_of(b.1)))
+            .map(|(i, r)| (i, *r))
+            .expect("one room at least");
+        let along_x = r[3] - r[1] > r[2] - r[0]; // a deep room is cut by a wall along x
+        let (lo, hi) = if along_x { (r[1], r[3]) } else { (r[0], r[2]) };
+        let c = lo + (hi - lo) * range(rng, [0.4, 0.6]);
+        let (a, b) = if along_x {
+            (
+                [r[0], r[1], r[2], c - t / 2.0],
+                [r[0], c + t / 2.0, r[2], r[3]],
+            )
+        } else {
+            (
+                [r[0], r[1], c - t / 2.0, r[3]],
+                [c + t / 2.0, r[1], r[2], r[3]],
+            )
+        };
+        cuts.push(Cut {
+            along_x,
+            at: c,
+            from: if along_x { r[0] } else { r[1] },
+            to: if along_x { r[2] } else { r[3] },
+        });
+        rects[i] = a;
+        rects.push(b);
+    }
+    // The largest room is the living room; the others what is left, in a random order.
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by(|&a, &b| area_of(&rects[b]).total_cmp(&area_of(&rects[a])));
+    let mut others = vec![RoomType::Bedroom, RoomType::Kitchen, RoomType::Study];
+    others.truncate(n - 1);
+    shuffle(&mut others, rng);
+    let mut kinds = vec![RoomType::Living; n];
+    for (k, &room) in order.iter().enumerate().skip(1) {
+        kinds[room] = others[k - 1];
+    }
+    let rooms: Vec<ApartmentRoom> = rects
+        .iter()
+        .zip(&kinds)
+        .map(|(&bounds, &kind)| ApartmentRoom { kind, bounds })
+        .collect();
+
+    let doors = place_doors(&rooms, config, rng, order[0]);
+    Layout {
+        w,
+        d,
+        rooms,
+        cuts,
+        doors,
+    }
 }
 
 fn area_of(r: &[f32; 4]) -> f32 {
