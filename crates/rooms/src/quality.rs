@@ -59,6 +59,17 @@ pub struct RegionQuality {
     /// Beds in the room.
     #[serde(default)]
     pub beds: usize,
+    /// Seats (chairs, sofas, beds) with a place where the filter seats or lays a body
+    /// ([`seat_places`](crate::torsos::seat_places), 0.1 m apart over the seat's footprint)
+    /// within [`SEAT_NEAR`] of an accessible region voxel's centre, percent (100 for none): a
+    /// seat judged by its whole surface, not by the one point
+    /// [`region_seat_coverage_pct`](Self::region_seat_coverage_pct) judges, which a model's
+    /// scanned seat can put off the seat.
+    #[serde(default)]
+    pub region_seat_places_pct: f64,
+    /// The same for beds alone.
+    #[serde(default)]
+    pub region_bed_places_pct: f64,
     /// Kept samples that [`implausible`] finds on or inside furniture people do not use that
     /// way, percent of those kept.
     pub implausible_pct: f64,
@@ -81,6 +92,8 @@ impl RegionQuality {
             "seat_coverage_pct": m(|x| x.seat_coverage_pct),
             "region_seat_coverage_pct": m(|x| x.region_seat_coverage_pct),
             "region_bed_coverage_pct": m(|x| x.region_bed_coverage_pct),
+            "region_seat_places_pct": m(|x| x.region_seat_places_pct),
+            "region_bed_places_pct": m(|x| x.region_bed_places_pct),
             "implausible_pct": m(|x| x.implausible_pct),
             "region_implausible_pct": m(|x| x.region_implausible_pct),
         })
@@ -98,6 +111,7 @@ impl RegionQuality {
         out["min_seat_coverage_pct"] = least(|q| q.seat_coverage_pct).into();
         out["min_region_seat_coverage_pct"] = least(|q| q.region_seat_coverage_pct).into();
         out["min_region_bed_coverage_pct"] = least(|q| q.region_bed_coverage_pct).into();
+        out["min_region_seat_places_pct"] = least(|q| q.region_seat_places_pct).into();
         let most = |f: fn(&RegionQuality) -> f64| qualities.iter().map(f).fold(0.0f64, f64::max);
         out["max_implausible_pct"] = most(|q| q.implausible_pct).into();
         out["max_region_implausible_pct"] = most(|q| q.region_implausible_pct).into();
@@ -206,6 +220,31 @@ pub fn judge_region(
             .collect::<Result<Vec<bool>>>()?;
         Ok(100.0 * bad.iter().filter(|&&b| b).count() as f64 / points.len().max(1) as f64)
     };
+    let places = crate::torsos::seat_places(room, 0.1)?;
+    // The share (percent) of the pieces of `places` (all, or beds) one of whose places lies
+    // within SEAT_NEAR of a centre.
+    let held = |centres: &[Point3m], beds_only: bool| -> f64 {
+        let of: Vec<&Vec<Point3m>> = places
+            .iter()
+            .filter(|(k, _)| !beds_only || room.furniture[*k].kind == ObjectKind::Bed)
+            .map(|(_, p)| p)
+            .collect();
+        if of.is_empty() {
+            return 100.0;
+        }
+        let hit = of
+            .iter()
+            .filter(|ps| covered_pct(ps, centres, SEAT_NEAR) > 0.0 && !ps.is_empty())
+            .count();
+        100.0 * hit as f64 / of.len() as f64
+    };
+    let (region_seat_places_pct, region_bed_places_pct) = match region {
+        None => (0.0, 0.0),
+        Some(region) => {
+            let centres = region.voxel_centres();
+            (held(&centres, false), held(&centres, true))
+        }
+    };
     let (region_voxels, region_implausible_pct, region_seat_coverage_pct, region_bed_coverage_pct) =
         match region {
             None => (0, 0.0, 0.0, 0.0),
@@ -236,6 +275,8 @@ pub fn judge_region(
         region_seat_coverage_pct,
         region_bed_coverage_pct,
         beds: beds.len(),
+        region_seat_places_pct,
+        region_bed_places_pct,
     })
 }
 

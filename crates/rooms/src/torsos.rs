@@ -12,7 +12,8 @@ use envfield_grid::Point3m;
 use envfield_grid::{MoveRule, SplitMix64};
 use envfield_scene::nalgebra::{Point3, Vector3};
 use envfield_scene::{
-    floor_map, generate_room, sample_surface, FloorMapConfig, ObjectKind, Room, RoomConfig, Scene,
+    floor_map, generate_room, sample_surface, FloorMapConfig, Furniture, ObjectKind, Room,
+    RoomConfig, Scene,
 };
 use envfield_vae::{PoseKind, RoomTorsos, TorsoSource};
 use rayon::prelude::*;
@@ -297,26 +298,7 @@ pub fn seat_grid(room: &Room, spacing: f32) -> Result<Vec<(Point3m, Support)>> {
     }
     let mut tries = Vec::new();
     for f in &room.furniture {
-        let Some(h) = f.seat_height else { continue };
-        if !matches!(
-            f.kind,
-            ObjectKind::Chair | ObjectKind::Sofa | ObjectKind::Bed
-        ) {
-            continue;
-        }
-        let (sin, cos) = f.yaw.sin_cos();
-        let half = [
-            0.5 * (f.size[0] * cos.abs() + f.size[1] * sin.abs()),
-            0.5 * (f.size[0] * sin.abs() + f.size[1] * cos.abs()),
-        ];
-        let steps = |h: f32| (2.0 * h / spacing).ceil() as usize;
-        for i in 0..=steps(half[0]) {
-            for j in 0..=steps(half[1]) {
-                let x = f.center[0] - half[0] + i as f32 * spacing;
-                let y = f.center[1] - half[1] + j as f32 * spacing;
-                tries.extend((0..=10).map(|k| [x, y, h + 0.025 * k as f32]));
-            }
-        }
+        tries.extend(seat_tries(f, spacing));
     }
     let affords = afford_all(&room.scene, &tries, &judged_in_place())?;
     Ok(tries
@@ -327,6 +309,69 @@ pub fn seat_grid(room: &Room, spacing: f32) -> Result<Vec<(Point3m, Support)>> {
             _ => None,
         })
         .collect())
+}
+
+/// The torso locations [`seat_grid`] tries over one piece of furniture (none for a piece
+/// that is not a chair, sofa or bed with a seat height).
+fn seat_tries(f: &Furniture, spacing: f32) -> Vec<Point3m> {
+    let Some(h) = f.seat_height else {
+        return Vec::new();
+    };
+    if !matches!(
+        f.kind,
+        ObjectKind::Chair | ObjectKind::Sofa | ObjectKind::Bed
+    ) {
+        return Vec::new();
+    }
+    let (sin, cos) = f.yaw.sin_cos();
+    let half = [
+        0.5 * (f.size[0] * cos.abs() + f.size[1] * sin.abs()),
+        0.5 * (f.size[0] * sin.abs() + f.size[1] * cos.abs()),
+    ];
+    let steps = |h: f32| (2.0 * h / spacing).ceil() as usize;
+    let mut tries = Vec::new();
+    for i in 0..=steps(half[0]) {
+        for j in 0..=steps(half[1]) {
+            let x = f.center[0] - half[0] + i as f32 * spacing;
+            let y = f.center[1] - half[1] + j as f32 * spacing;
+            tries.extend((0..=10).map(|k| [x, y, h + 0.025 * k as f32]));
+        }
+    }
+    tries
+}
+
+/// Every place a body sits or lies on each seat of `room` ([`seat_grid`]'s places, piece by
+/// piece, over the piece's own footprint): a seat is judged by all of them, not by one point
+/// whose place on the model a scan found.
+///
+/// # Errors
+/// As [`seat_grid`].
+pub fn seat_places(room: &Room, spacing: f32) -> Result<Vec<(usize, Vec<Point3m>)>> {
+    if !(spacing.is_finite() && spacing > 0.01) {
+        return Err(RoomsError::InvalidConfig(format!(
+            "seat places: spacing above 0.01 m (got {spacing})"
+        )));
+    }
+    let mut out = Vec::new();
+    for (k, f) in room.furniture.iter().enumerate() {
+        let tries = seat_tries(f, spacing);
+        if tries.is_empty() {
+            continue;
+        }
+        let affords = afford_all(&room.scene, &tries, &judged_in_place())?;
+        let places = tries
+            .into_iter()
+            .zip(affords)
+            .filter(|(t, a)| {
+                a.kept()
+                    && matches!(a.valid, Some(Support::Sitting | Support::Lying))
+                    && f.covers(t[0], t[1])
+            })
+            .map(|(t, _)| t)
+            .collect();
+        out.push((k, places));
+    }
+    Ok(out)
 }
 
 /// The rooms of seeds `seeds` (generated with the default [`RoomConfig`]) and their torso

@@ -408,3 +408,21 @@ fn walks_go_between_rooms_when_the_rooms_are_known() {
         }
     }
 }
+
+/// A seat is judged by every place over its footprint where the filter seats a body: the box
+/// seat has places, all over it, and the region holds them.
+#[test]
+fn a_seat_is_judged_by_every_place_on_it() {
+    let (room, region, _, seated) = seat_region();
+    let places = envfield_rooms::torsos::seat_places(&room, 0.1).unwrap();
+    assert_eq!(places.len(), 1, "one seat");
+    let (k, ps) = &places[0];
+    assert_eq!(*k, 0);
+    assert!(!ps.is_empty());
+    for p in ps {
+        assert!(room.furniture[0].covers(p[0], p[1]), "{p:?}");
+        assert!((p[2] - seated).abs() < 0.3, "{p:?} vs {seated}");
+    }
+    assert!(ps.iter().any(|p| region.contains(*p)));
+    assert!(envfield_rooms::torsos::seat_places(&room, 0.0).is_err());
+}
