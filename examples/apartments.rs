@@ -129,10 +129,11 @@ fn table(args: &Args, vae: &Cvae, catalogue: &Catalogue) -> Result<()> {
         for k in 0..args.count {
             let seed = args.first_seed + k;
             let apt = apartment(&models, &ApartmentConfig::default(), seed)?;
+            let triangles = apt.home.scene.to_mesh().triangles.len();
             if args.timing {
                 let file = from_file(&apt, vae, seed, scratch.path())?;
                 extra.push(serde_json::json!({"seed": seed, "from_file": file,
-                    "triangles": apt.home.scene.to_mesh().triangles.len(),
+                    "triangles": triangles,
                     "area_m2": apt.home.size[0] * apt.home.size[1]}));
                 bar.inc(1);
                 continue;
@@ -156,7 +157,7 @@ fn table(args: &Args, vae: &Cvae, catalogue: &Catalogue) -> Result<()> {
                     apt.rooms.len(),
                     apt.home.size[0] * apt.home.size[1],
                     apt.home.furniture.len(),
-                    apt.home.scene.to_mesh().triangles.len(),
+                    triangles,
                     q.region_implausible_pct,
                     q.region_seat_coverage_pct,
                     q.seats,
@@ -174,7 +175,7 @@ fn table(args: &Args, vae: &Cvae, catalogue: &Catalogue) -> Result<()> {
                 "rooms_reached": reached.iter().filter(|r| **r).count(),
                 "area_m2": apt.home.size[0] * apt.home.size[1],
                 "items": apt.home.furniture.len(),
-                "triangles": apt.home.scene.to_mesh().triangles.len(),
+                "triangles": triangles,
                 "samples": n,
                 "from_file": file,
             }));

@@ -179,15 +179,7 @@ pub fn pose_valid<S: SignedDistance + ?Sized>(
             return Ok(false);
         }
     }
-    // One resting joint decides "any suffices"; one that does not rest decides "all".
-    let any = support.any_joint_suffices();
-    for j in support_joints {
-        let p = &pose.joints[j.index()];
-        if rests_on(scene, p, scene.distance_at(p)?, config)? == any {
-            return Ok(any);
-        }
-    }
-    Ok(!any)
+    pose_supported(scene, pose, support, config)
 }
 
 /// Whether `pose` is supported: [`check_pose`]'s [`AffordanceReport::supported`], reading
@@ -204,6 +196,7 @@ pub fn pose_supported<S: SignedDistance + ?Sized>(
 ) -> Result<bool> {
     config.validate()?;
     pose.validate()?;
+    // One resting joint decides "any suffices"; one that does not rest decides "all".
     let any = support.any_joint_suffices();
     for j in support.joints() {
         let p = &pose.joints[j.index()];

@@ -43,6 +43,23 @@ pub struct Pair {
     pub kind: PairKind,
 }
 
+impl Pair {
+    /// The pair a region's sit-down makes: from its standing start to seated, its poses played
+    /// once.
+    ///
+    /// # Errors
+    /// As [`SitDown::sequence`].
+    pub fn sitting_down(sit: &SitDown) -> Result<Self> {
+        Ok(Self {
+            start: sit.start,
+            goal: sit.seated,
+            sequence: sit.sequence()?,
+            repeat: false,
+            kind: PairKind::Sit,
+        })
+    }
+}
+
 /// How [`pairs`] draws its pairs. The default is `room_nav`'s: 4 walks, each start and goal
 /// drawn together, at least a metre apart along the exact field.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -261,13 +278,7 @@ fn sit_down_pairs(room: &Room, region: &AccessibleRegion) -> Result<Vec<Pair>> {
                 d(a).total_cmp(&d(b))
             });
         if let Some(sit) = nearest {
-            out.push(Pair {
-                start: sit.start,
-                goal: sit.seated,
-                sequence: sit.sequence()?,
-                repeat: false,
-                kind: PairKind::Sit,
-            });
+            out.push(Pair::sitting_down(sit)?);
         }
     }
     Ok(out)
@@ -288,13 +299,7 @@ fn seat_pairs(region: &AccessibleRegion) -> Result<Vec<Pair>> {
             continue;
         }
         taken.push(sit.seated);
-        out.push(Pair {
-            start: sit.start,
-            goal: sit.seated,
-            sequence: sit.sequence()?,
-            repeat: false,
-            kind: PairKind::Sit,
-        });
+        out.push(Pair::sitting_down(sit)?);
     }
     Ok(out)
 }
