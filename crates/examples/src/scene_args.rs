@@ -14,16 +14,18 @@ use std::path::PathBuf;
 /// furnished from Sweet Home 3D's catalogue with `--catalogue`.
 #[derive(Clone, Debug, clap::Args)]
 pub struct SceneArgs {
-    /// A scene to read instead of a generated room (OBJ or PLY; metres and z up unless
-    /// --up and --units say otherwise).
+    /// A scene to read instead of a generated room: OBJ or PLY (metres and z up unless
+    /// --up and --units say otherwise), or glTF, `.gltf` or `.glb` (y up and metres, as its
+    /// specification fixes them).
     #[arg(long, alias = "room")]
     pub scene: Option<PathBuf>,
-    /// The scene file's up axis: z, or y (glTF, game levels).
-    #[arg(long, default_value = "z")]
-    pub up: UpAxis,
-    /// The scene file's units: m, cm, mm, or metres per unit.
-    #[arg(long, default_value = "m")]
-    pub units: Units,
+    /// The scene file's up axis, z or y (game levels), overriding its format's: y for glTF,
+    /// z for OBJ and PLY.
+    #[arg(long)]
+    pub up: Option<UpAxis>,
+    /// The scene file's units: m (the default), cm, mm, or metres per unit.
+    #[arg(long)]
+    pub units: Option<Units>,
     /// Furnish the rooms with Sweet Home 3D's furniture models instead of the generator's
     /// boxes (scripts/fetch_sweethome3d.sh fetches them).
     #[arg(long)]
@@ -46,7 +48,7 @@ impl SceneArgs {
         let Some(file) = &self.scene else {
             return Ok(None);
         };
-        let (scene, report) = read_scene(file, &ImportConfig::new(self.up, self.units))
+        let (scene, report) = read_scene(file, &ImportConfig::for_file(file, self.up, self.units))
             .with_context(|| format!("reading the scene {}", file.display()))?;
         eprintln!("{}: {report}", file.display());
         if let Some(n) = samples {

@@ -19,6 +19,16 @@ pub enum SceneError {
         /// What is wrong.
         reason: String,
     },
+    /// A glTF file could not be read: the part of it named is wrong or not supported.
+    #[error("{path}: {part}: {reason}")]
+    Gltf {
+        /// The file.
+        path: PathBuf,
+        /// Where in it: the document, a buffer, a mesh's primitive, a node.
+        part: String,
+        /// What is wrong.
+        reason: String,
+    },
     /// A mesh has no triangles.
     #[error("{0}: the mesh has no triangles")]
     EmptyMesh(String),

@@ -20,6 +20,18 @@ pub enum UpAxis {
     Z,
 }
 
+impl UpAxis {
+    /// The up axis a file's format fixes: +y for glTF (`.gltf`, `.glb`; its specification's
+    /// frame), +z (the library's) for anything else.
+    pub fn for_file(path: impl AsRef<std::path::Path>) -> Self {
+        let ext = path.as_ref().extension().and_then(|e| e.to_str());
+        match ext.map(str::to_ascii_lowercase).as_deref() {
+            Some("gltf" | "glb") => Self::Y,
+            _ => Self::Z,
+        }
+    }
+}
+
 impl FromStr for UpAxis {
     type Err = SceneError;
 
@@ -100,6 +112,19 @@ impl ImportConfig {
     pub fn new(up: UpAxis, units: Units) -> Self {
         Self { up, units }
     }
+
+    /// The frame a file's format fixes ([`UpAxis::for_file`], metres), each of `up` and
+    /// `units` overriding it when given: what a scene flag left unset means.
+    pub fn for_file(
+        path: impl AsRef<std::path::Path>,
+        up: Option<UpAxis>,
+        units: Option<Units>,
+    ) -> Self {
+        Self {
+            up: up.unwrap_or_else(|| UpAxis::for_file(path)),
+            units: units.unwrap_or_default(),
+        }
+    }
 }
 
 /// What [`import_mesh`] read and did, in metres and the library's frame.
@@ -115,6 +140,9 @@ pub struct ImportReport {
     pub shift: [f32; 3],
     /// What looks wrong, each naming the flag that would fix it.
     pub warnings: Vec<String>,
+    /// The file's named parts (OBJ objects and groups, glTF nodes), filled by [`read_scene`];
+    /// their triangle ranges index the imported mesh, whose triangles keep the file's order.
+    pub parts: Vec<crate::MeshPart>,
 }
 
 impl fmt::Display for ImportReport {
@@ -241,21 +269,26 @@ pub fn import_mesh(
         floor_height: floor,
         shift: shift.into(),
         warnings,
+        parts: Vec::new(),
     };
     Ok((out, report))
 }
 
-/// A scene read from an OBJ or PLY file and imported with `config` ([`import_mesh`]), as one
-/// object of kind [`ObjectKind::Mesh`](crate::ObjectKind), with the import's report.
+/// A scene read from an OBJ, PLY or glTF file and imported with `config` ([`import_mesh`];
+/// [`ImportConfig::for_file`] gives the frame the format fixes), as one object of kind
+/// [`ObjectKind::Mesh`](crate::ObjectKind), with the import's report and the file's named
+/// parts in it.
 ///
 /// # Errors
-/// The errors of [`TriangleMesh::read`], [`import_mesh`] and [`Scene::from_mesh`](crate::Scene).
+/// The errors of [`TriangleMesh::read_parts`], [`import_mesh`] and
+/// [`Scene::from_mesh`](crate::Scene).
 pub fn read_scene(
     path: impl AsRef<std::path::Path>,
     config: &ImportConfig,
 ) -> Result<(crate::Scene, ImportReport)> {
-    let mesh = TriangleMesh::read(path)?;
-    let (mesh, report) = import_mesh(&mesh, config)?;
+    let (mesh, parts) = TriangleMesh::read_parts(path)?;
+    let (mesh, mut report) = import_mesh(&mesh, config)?;
+    report.parts = parts;
     Ok((crate::Scene::from_mesh("scene", &mesh)?, report))
 }
 

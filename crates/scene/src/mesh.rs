@@ -7,6 +7,18 @@ use nalgebra::Point3;
 
 use crate::error::{Result, SceneError};
 
+/// A named run of a mesh's triangles: an OBJ file's object or group (`o`, `g`), a glTF node
+/// that holds a mesh. Reading a file keeps them ([`TriangleMesh::read_parts`]) so later steps
+/// can tell the pieces of a scene apart.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct MeshPart {
+    /// The object's, group's or node's name (a glTF node without one: its mesh's, or
+    /// `node N`).
+    pub name: String,
+    /// Its triangles, indices into [`TriangleMesh::triangles`].
+    pub triangles: std::ops::Range<usize>,
+}
+
 /// A triangle soup with shared vertices: what OBJ and PLY files hold.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct TriangleMesh {
@@ -102,18 +114,42 @@ impl TriangleMesh {
         Ok(())
     }
 
-    /// Reads an OBJ or PLY file, chosen by the extension.
+    /// Reads an OBJ, PLY or glTF (`.gltf`, `.glb`) file, chosen by the extension, in the
+    /// file's own frame (a glTF file's is +y up, [`UpAxis::for_file`](crate::UpAxis::for_file)).
     ///
     /// # Errors
     /// [`SceneError::InvalidInput`] for another extension, and the errors of
-    /// [`TriangleMesh::read_obj`] / [`TriangleMesh::read_ply`].
+    /// [`TriangleMesh::read_obj`], [`TriangleMesh::read_ply`] and [`crate::read_gltf`].
     pub fn read(path: impl AsRef<Path>) -> Result<Self> {
+        Ok(Self::read_parts(path)?.0)
+    }
+
+    /// [`TriangleMesh::read`] with the file's named parts: OBJ objects and groups, glTF nodes
+    /// holding meshes (a PLY file is one part, named after the file).
+    ///
+    /// # Errors
+    /// As [`TriangleMesh::read`].
+    pub fn read_parts(path: impl AsRef<Path>) -> Result<(Self, Vec<MeshPart>)> {
         let path = path.as_ref();
         match extension(path).as_deref() {
-            Some("obj") => Self::read_obj(path),
-            Some("ply") => Self::read_ply(path),
+            Some("obj") => {
+                let bytes = std::fs::read(path).map_err(|source| io(path, source))?;
+                Self::parse_obj_parts(&String::from_utf8_lossy(&bytes), path)
+            }
+            Some("ply") => {
+                let mesh = Self::read_ply(path)?;
+                let name = path
+                    .file_stem()
+                    .map_or_else(String::new, |s| s.to_string_lossy().into_owned());
+                let part = MeshPart {
+                    name,
+                    triangles: 0..mesh.triangles.len(),
+                };
+                Ok((mesh, vec![part]))
+            }
+            Some("gltf" | "glb") => crate::read_gltf(path),
             _ => Err(SceneError::InvalidInput(format!(
-                "{}: expected a .obj or .ply mesh",
+                "{}: expected a .obj, .ply, .gltf or .glb scene",
                 path.display()
             ))),
         }
@@ -155,7 +191,20 @@ impl TriangleMesh {
     /// # Errors
     /// As [`TriangleMesh::read_obj`], without the I/O.
     pub fn parse_obj(text: &str, source: impl AsRef<Path>) -> Result<Self> {
+        Ok(Self::parse_obj_parts(text, source)?.0)
+    }
+
+    /// [`TriangleMesh::parse_obj`] with the file's objects and groups (`o`, `g`; the faces
+    /// before the first are a part named after nothing, kept only if it holds any).
+    ///
+    /// # Errors
+    /// As [`TriangleMesh::parse_obj`].
+    pub fn parse_obj_parts(text: &str, source: impl AsRef<Path>) -> Result<(Self, Vec<MeshPart>)> {
         let path = source.as_ref();
+        let mut parts = vec![MeshPart {
+            name: String::new(),
+            triangles: 0..0,
+        }];
         let err = |line: usize, reason: String| SceneError::Parse {
             path: path.to_path_buf(),
             line,
@@ -205,11 +254,26 @@ impl TriangleMesh {
                         mesh.triangles.push([idx[0], idx[k], idx[k + 1]]);
                     }
                 }
+                Some("o" | "g") => {
+                    let name = words.collect::<Vec<_>>().join(" ");
+                    let at = mesh.triangles.len();
+                    if let Some(last) = parts.last_mut() {
+                        last.triangles.end = at;
+                    }
+                    parts.push(MeshPart {
+                        name,
+                        triangles: at..at,
+                    });
+                }
                 _ => {}
             }
         }
         mesh.validate(&path.display().to_string())?;
-        Ok(mesh)
+        if let Some(last) = parts.last_mut() {
+            last.triangles.end = mesh.triangles.len();
+        }
+        parts.retain(|p| !p.triangles.is_empty());
+        Ok((mesh, parts))
     }
 
     /// Reads a PLY file: ASCII or binary little/big endian, a `vertex` element with float or
