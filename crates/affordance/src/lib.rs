@@ -30,20 +30,24 @@
 //! ```
 
 mod align;
+mod bvh;
 mod check;
 mod error;
 mod filter;
+mod gltf_out;
 mod motion;
 mod place;
 mod skeleton;
 
 pub use align::{align_in_scene, align_to_trajectory, resample_path, walk_along, AlignConfig};
+pub use bvh::{bvh_order, bvh_text, write_bvh};
 pub use check::{
     bones_clear, check_pose, check_sequence, pose_supported, pose_valid, AffordanceConfig,
     AffordanceReport,
 };
 pub use error::{AffordanceError, Result};
 pub use filter::{afford, afford_all, plausible, Afford, FilterConfig};
+pub use gltf_out::{glb_bytes, write_glb, Actor};
 pub use motion::{
     get_up, lie_down, sit_down, standing_pose, walk, LieConfig, SitConfig, WalkConfig,
 };
