@@ -27,7 +27,7 @@ use envfield::rooms::{
 };
 use envfield::scene::{RoomConfig, Scene};
 use envfield::vae::{Cvae, Gate, SampleOptions};
-use envfield_examples::SceneArgs;
+use envfield_examples::{MotionArgs, SceneArgs};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -96,6 +96,10 @@ struct Args {
     /// Print the summary as one JSON line (always the last line with --rooms).
     #[arg(long)]
     json: bool,
+    /// The scene (and, on the page, its region) out for a viewer: `--gltf` writes the scene
+    /// alone, y up, a glTF file any tool reads back as the same scene.
+    #[command(flatten)]
+    motion: MotionArgs,
 }
 
 /// What the rooms are, for the summary.
@@ -156,6 +160,8 @@ fn one(args: &Args, vae: &Cvae) -> Result<()> {
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
     envfield::grid::check_writable(args.out.join("summary.json"))?;
+    let inputs: Vec<&std::path::Path> = args.scene.scene.iter().map(PathBuf::as_path).collect();
+    args.motion.check(&inputs)?;
     let rooms = args.scene.rooms(RoomConfig::default())?;
     let (scene, room) = args.scene.scene(&rooms, args.seed, Some(args.samples))?;
     scene.to_mesh().write(args.out.join("scene.obj"))?;
@@ -173,6 +179,13 @@ fn one(args: &Args, vae: &Cvae) -> Result<()> {
     region.times.filter_ms = filter_ms;
     let region_ms = t.elapsed().as_secs_f64() * 1e3;
     region.write_files(&args.out)?;
+    if args.motion.any() {
+        let points: Vec<_> = region.voxel_centres().iter().map(|&p| p.into()).collect();
+        let title = format!("{} {}", furniture(args), args.seed);
+        for f in args.motion.write(&scene.to_mesh(), &points, &[], &title)? {
+            eprintln!("wrote {}", f.display());
+        }
+    }
     let goal = middle_goal(&region);
     let exact = ExactField3::new(&region, goal)?;
     write_field_view(&region, &exact, args.out.join("field_exact.png"))?;

@@ -21,6 +21,7 @@
 use anyhow::{bail, Context, Result};
 use clap::Parser;
 use envfield::affordance::{walk, WalkConfig};
+use envfield::affordance::{Actor, PoseSequence};
 use envfield::nets::FieldNet;
 use envfield::rooms::field3_store::{save_tagged, FieldOrigin, Obtained};
 use envfield::rooms::harness::{
@@ -31,7 +32,7 @@ use envfield::rooms::tables::{finite_mean, mean_bytes, Tally};
 use envfield::rooms::{sample_region, AccessibleRegion, Field3Config, FieldStore};
 use envfield::scene::RoomConfig;
 use envfield::vae::Cvae;
-use envfield_examples::{Navmesh, SceneArgs};
+use envfield_examples::{MotionArgs, Navmesh, SceneArgs};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -105,6 +106,9 @@ struct Args {
     /// its goal's seconds, reached, relaxed, valid share, path ratio, distance left).
     #[arg(long)]
     walks_out: Option<PathBuf>,
+    /// The first room's people (one per pair, the first planner's path) out for a viewer.
+    #[command(flatten)]
+    motion: MotionArgs,
 }
 
 fn root() -> &'static Path {
@@ -190,6 +194,8 @@ fn main() -> Result<()> {
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
     envfield::grid::check_writable(args.out.join("top.png"))?;
+    let inputs: Vec<&Path> = args.scene.scene.iter().map(PathBuf::as_path).collect();
+    args.motion.check(&inputs)?;
     let vae_file = args
         .vae
         .clone()
@@ -209,6 +215,9 @@ fn main() -> Result<()> {
         })
         .transpose()?;
     let mut tally = Tally::default();
+    // The first room's people, for --gltf, --bvh and --html: one per pair.
+    let mut people: Vec<(String, PoseSequence)> = Vec::new();
+    let mut first_room = None;
     let mut field_s = Vec::new();
     let (mut region_s, mut memory) = (Vec::new(), Vec::new());
     for k in 0..args.rooms {
@@ -244,6 +253,9 @@ fn main() -> Result<()> {
             navmesh: mesh.as_ref().map(|m| (m as &dyn FloorPlanner, m.build_s)),
         };
         memory.push(room.bytes()?);
+        if k == 0 && args.motion.any() {
+            first_room = Some((scene.to_mesh(), region.voxel_centres()));
+        }
         let options = PairOptions {
             walks: args.pairs,
             rooms: &zones,
@@ -262,6 +274,10 @@ fn main() -> Result<()> {
             let runs = run_pair(&room, pair, &room_planners, &settings)?;
             if k == 0 && i == 0 {
                 write_run_files(&args.out, &scene, &region, &runs)?;
+            }
+            if let (0, Some(run)) = (k, runs.first()) {
+                let name = format!("{} {i}: {}", pair.kind.name(), run.planner.name());
+                people.push((name, run.poses.clone()));
             }
             if let Some(w) = walks_out.as_mut() {
                 for r in &runs {
@@ -290,6 +306,19 @@ fn main() -> Result<()> {
     }
     if let Some(mut w) = walks_out {
         w.flush().context("--walks-out: writing")?;
+    }
+    if let Some((mesh, points)) = first_room {
+        let actors: Vec<Actor> = people
+            .iter()
+            .map(|(name, poses)| Actor { name, poses })
+            .collect();
+        let points: Vec<_> = points.iter().map(|&p| p.into()).collect();
+        for f in args
+            .motion
+            .write(&mesh, &points, &actors, &format!("room {}", args.seed))?
+        {
+            eprintln!("wrote {}", f.display());
+        }
     }
     println!("{line}");
     Ok(())

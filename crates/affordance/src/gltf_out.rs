@@ -170,12 +170,17 @@ fn turn_to(d: Vector3<f32>) -> UnitQuaternion<f32> {
     })
 }
 
-/// The GLB bytes of `scene` (optional) and `actors`, each with one animation.
+/// The GLB bytes of `scene` (optional), `points` (an accessible region's voxel centres, say,
+/// drawn as points; none for an empty slice) and `actors`, each with one animation.
 ///
 /// # Errors
-/// [`AffordanceError::InvalidInput`] for an actor without frames or with a non-finite joint, or
-/// a scene mesh that does not validate.
-pub fn glb_bytes(scene: Option<&TriangleMesh>, actors: &[Actor]) -> Result<Vec<u8>> {
+/// [`AffordanceError::InvalidInput`] for an actor without frames or with a non-finite joint, a
+/// point that is not finite, or a scene mesh that does not validate.
+pub fn glb_bytes(
+    scene: Option<&TriangleMesh>,
+    points: &[Point3<f32>],
+    actors: &[Actor],
+) -> Result<Vec<u8>> {
     let mut b = Builder::default();
     let mut meshes = Vec::new();
     let mut nodes: Vec<Value> = Vec::new();
@@ -194,6 +199,24 @@ pub fn glb_bytes(scene: Option<&TriangleMesh>, actors: &[Actor]) -> Result<Vec<u
             {"attributes": {"POSITION": pos}, "indices": idx, "material": 0}]}));
         nodes.push(json!({"name": "scene", "mesh": 0}));
         roots.push(0);
+    }
+    if !points.is_empty() {
+        if let Some(i) = points.iter().position(|p| !p.iter().all(|c| c.is_finite())) {
+            return Err(AffordanceError::InvalidInput(format!(
+                "point {i} is not finite"
+            )));
+        }
+        let flat: Vec<f32> = points.iter().flat_map(|&p| to_gltf(p)).collect();
+        let pos = b.floats(&flat, 3, "VEC3", Some(34962));
+        materials.push(json!({
+            "name": "region",
+            "pbrMetallicRoughness": {"baseColorFactor": [0.2, 0.45, 0.95, 1.0],
+                                      "metallicFactor": 0.0, "roughnessFactor": 1.0},
+        }));
+        meshes.push(json!({"name": "region", "primitives": [
+            {"attributes": {"POSITION": pos}, "mode": 0, "material": materials.len() - 1}]}));
+        nodes.push(json!({"name": "region", "mesh": meshes.len() - 1}));
+        roots.push(nodes.len() - 1);
     }
     let (bv, bt) = ball();
     let ball_acc = b.mesh(&bv, &bt);
@@ -350,8 +373,9 @@ pub fn glb_bytes(scene: Option<&TriangleMesh>, actors: &[Actor]) -> Result<Vec<u
 pub fn write_glb(
     path: impl AsRef<Path>,
     scene: Option<&TriangleMesh>,
+    points: &[Point3<f32>],
     actors: &[Actor],
 ) -> Result<()> {
-    let bytes = glb_bytes(scene, actors)?;
+    let bytes = glb_bytes(scene, points, actors)?;
     envfield_grid::write_atomic(path, &bytes).map_err(|e| AffordanceError::Scene(e.into()))
 }

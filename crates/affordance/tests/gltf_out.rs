@@ -55,7 +55,7 @@ fn a_glb_of_two_people_holds_their_poses_at_rest_and_in_every_key() {
             poses: &seated,
         },
     ];
-    let glb = glb_bytes(Some(&scene), &actors).unwrap();
+    let glb = glb_bytes(Some(&scene), &[Point3::new(0.5, 0.5, 0.5)], &actors).unwrap();
     let gltf = envfield_scene_gltf_check(&glb);
     assert_eq!(gltf, 2);
 
@@ -142,6 +142,7 @@ fn people_without_frames_are_refused_by_name() {
     walking.frames[4].joints[3].x = f32::NAN;
     let e = glb_bytes(
         None,
+        &[],
         &[Actor {
             name: "odd one",
             poses: &walking,

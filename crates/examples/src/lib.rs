@@ -4,8 +4,12 @@
 //! ([`Navmesh`]: Recast's pipeline in Rust and Polyanya's any-angle search, crates the
 //! library must not depend on). Not published.
 
+mod motion_out;
 mod navmesh;
 mod scene_args;
+mod viewer;
 
+pub use motion_out::MotionArgs;
 pub use navmesh::{Navmesh, NavmeshConfig};
 pub use scene_args::{RoomMaker, SceneArgs};
+pub use viewer::{viewer_page, ThreeJs};
