@@ -8,7 +8,7 @@
 set -euo pipefail
 cd "$(dirname "$0")"
 secs=${1:-60}
-targets=(${TARGETS:-maze_text png npy obj ply pose_json weights model_config scene_import vae_file})
+targets=(${TARGETS:-maze_text png npy obj ply pose_json weights model_config scene_import vae_file gltf})
 cargo +nightly fuzz build -O "${targets[@]/#/}" >/dev/null 2>&1 || cargo +nightly fuzz build -O
 printf '%-14s %8s %12s %8s\n' target seconds executions crashes
 for t in "${targets[@]}"; do

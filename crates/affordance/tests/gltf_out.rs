@@ -208,3 +208,40 @@ fn bvh_files_read_back_with_their_joints_frames_and_poses() {
         eprintln!("{:?}: worst joint {worst:.4} m off", seq.activity);
     }
 }
+
+/// A furnished room written as OBJ (z up) and as GLB (y up, from it), each read with no flag
+/// (the format fixes the frame), is the same scene: the same triangles, the same move onto
+/// the floor, the same floor map.
+#[test]
+fn a_room_as_obj_and_as_glb_reads_as_the_same_scene() {
+    use envfield_scene::{
+        floor_map, generate_room, read_scene, FloorMapConfig, ImportConfig, RoomConfig,
+    };
+    let room = generate_room(&RoomConfig::default(), 11).unwrap();
+    let mesh = room.scene.to_mesh();
+    let dir = tempfile::tempdir().unwrap();
+    let (obj, glb) = (dir.path().join("room.obj"), dir.path().join("room.glb"));
+    mesh.write(&obj).unwrap();
+    std::fs::write(&glb, glb_bytes(Some(&mesh), &[], &[]).unwrap()).unwrap();
+    let (a, ra) = read_scene(&obj, &ImportConfig::for_file(&obj, None, None)).unwrap();
+    let (b, rb) = read_scene(&glb, &ImportConfig::for_file(&glb, None, None)).unwrap();
+    assert!(
+        ra.warnings.is_empty() && rb.warnings.is_empty(),
+        "{ra} / {rb}"
+    );
+    assert_eq!((ra.triangles, ra.shift), (rb.triangles, rb.shift));
+    let (ma, mb) = (a.to_mesh(), b.to_mesh());
+    let worst = ma
+        .vertices
+        .iter()
+        .zip(&mb.vertices)
+        .map(|(p, q)| (p - q).norm())
+        .fold(0.0f32, f32::max);
+    assert!(worst < 1e-5, "{worst}");
+    let config = FloorMapConfig::default();
+    let (fa, fb) = (
+        floor_map(&a, &config).unwrap(),
+        floor_map(&b, &config).unwrap(),
+    );
+    assert_eq!(fa.grid, fb.grid);
+}

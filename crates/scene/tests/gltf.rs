@@ -304,3 +304,41 @@ fn base64(bytes: &[u8]) -> String {
     }
     out
 }
+
+/// OBJ objects and groups come back as named parts over their faces; faces before the first
+/// name are a part of their own.
+#[test]
+fn obj_objects_and_groups_are_kept_as_named_parts() {
+    let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 3\no table\ng table top\nf 2 4 3\nf 1 2 4\ng\no chair\nf 1 3 4\n";
+    let (mesh, parts) = TriangleMesh::parse_obj_parts(text, "room.obj").unwrap();
+    assert_eq!(mesh.triangles.len(), 4);
+    let got: Vec<(&str, std::ops::Range<usize>)> = parts
+        .iter()
+        .map(|p| (p.name.as_str(), p.triangles.clone()))
+        .collect();
+    assert_eq!(got, vec![("", 0..1), ("table top", 1..3), ("chair", 3..4)]);
+}
+
+/// The fuzz target's seeds (fuzz/seeds/gltf/: triangles, strips and fans under nested nodes
+/// as .gltf, and the triangles as .glb) read: six indices are two triangles, or four as a
+/// strip or a fan, under each of the two nodes.
+#[test]
+fn the_fuzz_seeds_read() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fuzz/seeds/gltf");
+    let mut n = 0;
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let p = entry.unwrap().path();
+        let bytes = std::fs::read(&p).unwrap();
+        let (mesh, parts) = parse_gltf(&bytes, None, &p).unwrap();
+        assert_eq!(parts.len(), 2, "{}", p.display());
+        let name = p.file_name().unwrap().to_string_lossy();
+        let per_node = if name.contains("mode5") || name.contains("mode6") {
+            4
+        } else {
+            2
+        };
+        assert_eq!(mesh.triangles.len(), 2 * per_node, "{name}");
+        n += 1;
+    }
+    assert_eq!(n, 4);
+}

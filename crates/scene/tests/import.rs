@@ -138,3 +138,121 @@ fn unusual_files_warn_or_come_out_right() {
         );
     }
 }
+
+/// `mesh` (in the file's frame) as a glTF document whose vertices sit under a chain of nodes,
+/// each with its own translation, turn about y and scale: the stored positions are the
+/// mesh's moved by the chain's inverse, so composing the chain gives the mesh back.
+fn nested_gltf(mesh: &TriangleMesh, chain: &[([f32; 3], f32, f32)]) -> String {
+    use envfield_scene::nalgebra::{Matrix4, Translation3, UnitQuaternion, Vector3};
+    let mut world = Matrix4::identity();
+    let mut nodes = Vec::new();
+    for (k, &(t, angle, scale)) in chain.iter().enumerate() {
+        let q = UnitQuaternion::from_axis_angle(&Vector3::y_axis(), angle);
+        world *= Translation3::new(t[0], t[1], t[2]).to_homogeneous()
+            * q.to_homogeneous()
+            * Matrix4::new_scaling(scale);
+        let child = if k + 1 < chain.len() {
+            format!(r#", "children": [{}]"#, k + 1)
+        } else {
+            r#", "mesh": 0"#.to_string()
+        };
+        nodes.push(format!(
+            r#"{{"translation": [{}, {}, {}], "rotation": [{}, {}, {}, {}], "scale": [{scale}, {scale}, {scale}]{child}}}"#,
+            t[0], t[1], t[2], q.i, q.j, q.k, q.w
+        ));
+    }
+    let inverse = world.try_inverse().unwrap();
+    let mut bytes = Vec::new();
+    let mut lo = [f32::MAX; 3];
+    let mut hi = [f32::MIN; 3];
+    for v in &mesh.vertices {
+        let p = inverse.transform_point(v);
+        for k in 0..3 {
+            bytes.extend(p[k].to_le_bytes());
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    let positions = bytes.len();
+    for t in &mesh.triangles {
+        for i in t {
+            bytes.extend(i.to_le_bytes());
+        }
+    }
+    format!(
+        r#"{{"asset": {{"version": "2.0"}}, "scene": 0, "scenes": [{{"nodes": [0]}}],
+        "nodes": [{}], "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}, "indices": 1}}]}}],
+        "buffers": [{{"byteLength": {}, "uri": "data:application/octet-stream;base64,{}"}}],
+        "bufferViews": [{{"buffer": 0, "byteLength": {positions}}}, {{"buffer": 0, "byteOffset": {positions}, "byteLength": {}}}],
+        "accessors": [{{"bufferView": 0, "componentType": 5126, "count": {}, "type": "VEC3", "min": {lo:?}, "max": {hi:?}}},
+                      {{"bufferView": 1, "componentType": 5125, "count": {}, "type": "SCALAR"}}]}}"#,
+        nodes.join(", "),
+        bytes.len(),
+        base64(&bytes),
+        bytes.len() - positions,
+        mesh.vertices.len(),
+        mesh.triangles.len() * 3,
+    )
+}
+
+fn base64(bytes: &[u8]) -> String {
+    const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut out = String::new();
+    for chunk in bytes.chunks(3) {
+        let b = [
+            chunk[0],
+            *chunk.get(1).unwrap_or(&0),
+            *chunk.get(2).unwrap_or(&0),
+        ];
+        let n = (u32::from(b[0]) << 16) | (u32::from(b[1]) << 8) | u32::from(b[2]);
+        for k in 0..4 {
+            out.push(if k <= chunk.len() {
+                A[(n >> (18 - 6 * k) & 63) as usize] as char
+            } else {
+                '='
+            });
+        }
+    }
+    out
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig {
+        cases: 8,
+        failure_persistence: None,
+        rng_seed: proptest::test_runner::RngSeed::Fixed(54),
+        ..ProptestConfig::default()
+    })]
+
+    /// A generated room written as y-up glTF under 1-4 nested node transforms (translations,
+    /// turns about the up axis, scales), read with no flag, is the same room as read from
+    /// its z-up mesh: the same floor map, no warning.
+    #[test]
+    fn a_y_up_gltf_room_under_nested_transforms_imports_as_the_same_room(
+        seed in 0u64..4,
+        chain in proptest::collection::vec(
+            ((-50.0f32..50.0, -3.0f32..3.0, -50.0f32..50.0), -3.1f32..3.1, 0.5f32..2.0), 1..5),
+    ) {
+        let room = generate_room(&RoomConfig::default(), seed).unwrap();
+        let original = room.scene.to_mesh();
+        let (reference, _) = import_mesh(&original, &ImportConfig::default()).unwrap();
+        // y up: (x, y, z) -> (x, z, -y).
+        let mut file = original.clone();
+        for v in &mut file.vertices {
+            *v = Point3::new(v.x, v.z, -v.y);
+        }
+        let chain: Vec<_> = chain.into_iter().map(|((x, y, z), a, s)| ([x, y, z], a, s)).collect();
+        let text = nested_gltf(&file, &chain);
+        let (read, parts) = envfield_scene::parse_gltf(text.as_bytes(), None, "room.gltf").unwrap();
+        prop_assert_eq!(parts.len(), 1);
+        let config = ImportConfig::for_file("room.gltf", None, None);
+        let (back, report) = import_mesh(&read, &config).unwrap();
+        prop_assert!(report.warnings.is_empty(), "{:?}", report.warnings);
+        let worst = back.vertices.iter().zip(&reference.vertices)
+            .map(|(a, b)| (a - b).norm()).fold(0.0f32, f32::max);
+        prop_assert!(worst < 2e-3, "a vertex {worst} m off");
+        let (a, b) = (floor(&reference), floor(&back));
+        prop_assert!(a.1.abs_diff(b.1) <= 1 && a.2.abs_diff(b.2) <= 1, "{a:?} against {b:?}");
+        prop_assert!(a.0.abs_diff(b.0) * 100 <= a.0, "{a:?} against {b:?}");
+    }
+}
