@@ -182,7 +182,10 @@ fn one(args: &Args, vae: &Cvae) -> Result<()> {
     if args.motion.any() {
         let points: Vec<_> = region.voxel_centres().iter().map(|&p| p.into()).collect();
         let title = format!("{} {}", furniture(args), args.seed);
-        for f in args.motion.write(&scene.to_mesh(), &points, &[], &title)? {
+        for f in args
+            .motion
+            .write(&scene.to_mesh(), &points, &[], &title, true)?
+        {
             eprintln!("wrote {}", f.display());
         }
     }

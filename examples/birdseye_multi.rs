@@ -19,7 +19,7 @@ use std::time::Instant;
 
 use anyhow::{bail, Context, Result};
 use clap::Parser;
-use envfield::affordance::{walk, WalkConfig};
+use envfield::affordance::{walk, Actor, WalkConfig};
 use envfield::eikonal::FastMarching;
 use envfield::grid::{Canvas, Point2};
 use envfield::nets::FieldNet;
@@ -28,7 +28,7 @@ use envfield::plan::crowd::{
 };
 use envfield::rooms::birdseye::{crowd_frames, CrowdTally, Floor, RESOLUTION};
 use envfield::scene::RoomConfig;
-use envfield_examples::SceneArgs;
+use envfield_examples::{MotionArgs, SceneArgs};
 
 #[global_allocator]
 static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
@@ -74,6 +74,10 @@ struct Args {
     /// Time steps before giving up.
     #[arg(long, default_value_t = 400)]
     max_steps: usize,
+    /// Everyone's walk on the run's clock out for a viewer (one room only): --gltf, --bvh,
+    /// --html.
+    #[command(flatten)]
+    motion: MotionArgs,
 }
 
 fn main() -> Result<()> {
@@ -83,6 +87,9 @@ fn main() -> Result<()> {
     }
     if args.rooms.is_some_and(|r| r > 100_000) {
         bail!("--rooms: at most 100000");
+    }
+    if args.rooms.is_some() && args.motion.any() {
+        bail!("--gltf, --bvh and --html write one room's people: not with --rooms");
     }
     if args
         .seed
@@ -176,6 +183,8 @@ fn one_room(args: &Args, model: &FieldNet, config: &CrowdConfig) -> Result<()> {
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
     envfield::grid::check_writable(args.out.join("crowd.json"))?;
+    let inputs: Vec<&std::path::Path> = args.scene.scene.iter().map(PathBuf::as_path).collect();
+    args.motion.check(&inputs)?;
     let rooms = args.scene.rooms(RoomConfig::birdseye())?;
     let (scene, _) = args.scene.scene(&rooms, args.seed, None)?;
     let floor = Floor::new(scene, args.body_radius)?;
@@ -196,7 +205,13 @@ fn one_room(args: &Args, model: &FieldNet, config: &CrowdConfig) -> Result<()> {
     // Each person's walk, aligned to their path and checked in the scene.
     let gait = walk(&WalkConfig::default(), args.seed)?;
     let mut people = Vec::new();
+    // A time step's seconds at the gait's speed: the motion out plays on the run's clock.
+    let step_s = config.step_length * RESOLUTION / (gait.step_length() * gait.fps);
+    let mut timed = Vec::new();
     for (i, trip) in trips.iter().enumerate() {
+        if args.motion.any() {
+            timed.push(floor.timed_walk(&run, i, &gait, step_s)?.0);
+        }
         let (aligned, reports) = floor.aligned_walk(&run, i, &gait)?;
         aligned.write(args.out.join(format!("walk_{i}.json")))?;
         let valid = reports.iter().filter(|r| r.valid()).count();
@@ -229,6 +244,21 @@ fn one_room(args: &Args, model: &FieldNet, config: &CrowdConfig) -> Result<()> {
         args.out.join("crowd.json"),
         serde_json::to_string_pretty(&summary)?.as_bytes(),
     )?;
+    if args.motion.any() {
+        let names: Vec<String> = (0..timed.len()).map(|i| format!("person {i}")).collect();
+        let actors: Vec<Actor> = names
+            .iter()
+            .zip(&timed)
+            .map(|(name, poses)| Actor { name, poses })
+            .collect();
+        let title = format!("{} people, room {}", args.people, args.seed);
+        for f in args
+            .motion
+            .write(&floor.scene.to_mesh(), &[], &actors, &title, true)?
+        {
+            eprintln!("wrote {}", f.display());
+        }
+    }
     let frames = crowd_frames(&floor.walkable, &trips, &run, model, config)?;
     match &args.frames {
         Some(dir) => {

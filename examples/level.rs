@@ -21,6 +21,7 @@
 //! `--out`; the last line is JSON.
 use anyhow::{bail, Context, Result};
 use clap::Parser;
+use envfield::affordance::{Actor, PoseSequence};
 use envfield::rooms::harness::{
     pairs, run_pair, PairOptions, RoomContext, RoomPlanner, RunSettings,
 };
@@ -28,6 +29,7 @@ use envfield::rooms::pictures::height_view;
 use envfield::rooms::tables::{finite_mean, Tally};
 use envfield::rooms::{standing_torsos, AccessibleRegion, RegionConfig};
 use envfield::scene::{read_scene, ImportConfig, Units, UpAxis};
+use envfield_examples::MotionArgs;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -74,6 +76,9 @@ struct Args {
     /// The summary as one JSON line only.
     #[arg(long)]
     json: bool,
+    /// Ours' people (one per pair) out for a viewer: --gltf, --bvh, --html.
+    #[command(flatten)]
+    motion: MotionArgs,
 }
 
 /// The planners of a level: ours on the exact field, PRM, RRT and the line.
@@ -114,6 +119,7 @@ fn main() -> Result<()> {
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
     envfield::grid::check_writable(args.out.join("top.png"))?;
+    args.motion.check(&[args.scene.as_path()])?;
 
     let (scene, report) = read_scene(&args.scene, &ImportConfig::new(args.up, args.units))?;
     eprintln!("{}: {report}", args.scene.display());
@@ -188,6 +194,7 @@ fn main() -> Result<()> {
     let mut tally = Tally::default();
     // Ours' path of every pair, and every planner's of the first.
     let mut drawn = Vec::new();
+    let mut people: Vec<(String, PoseSequence)> = Vec::new();
     for (i, pair) in pairs.iter().enumerate() {
         let settings = RunSettings {
             budget: args.budget,
@@ -206,6 +213,7 @@ fn main() -> Result<()> {
         }
         for r in runs.iter().filter(|r| r.planner == RoomPlanner::OursExact) {
             drawn.push((r.planner, r.path.clone()));
+            people.push((format!("walk {i}"), r.poses.clone()));
             if !r.outcome.reached {
                 eprintln!(
                     "pair {i}: ours stopped {:.2} m from the goal{}",
@@ -221,6 +229,20 @@ fn main() -> Result<()> {
         tally.add(pair.kind, &runs);
     }
     height_view(&region, 3, &drawn).write_png(args.out.join("top.png"))?;
+    if args.motion.any() {
+        let actors: Vec<Actor> = people
+            .iter()
+            .map(|(name, poses)| Actor { name, poses })
+            .collect();
+        let points: Vec<_> = centres.iter().map(|&p| p.into()).collect();
+        let title = args.scene.display().to_string();
+        for f in args
+            .motion
+            .write(&scene.to_mesh(), &points, &actors, &title, false)?
+        {
+            eprintln!("wrote {}", f.display());
+        }
+    }
 
     let rises: Vec<f64> = pairs
         .iter()

@@ -313,10 +313,21 @@ fn main() -> Result<()> {
             .map(|(name, poses)| Actor { name, poses })
             .collect();
         let points: Vec<_> = points.iter().map(|&p| p.into()).collect();
-        for f in args
-            .motion
-            .write(&mesh, &points, &actors, &format!("room {}", args.seed))?
-        {
+        for f in args.motion.write(
+            &mesh,
+            &points,
+            &actors,
+            &format!(
+                "{} {}",
+                if args.scene.apartment {
+                    "apartment"
+                } else {
+                    "room"
+                },
+                args.seed
+            ),
+            true,
+        )? {
             eprintln!("wrote {}", f.display());
         }
     }

@@ -2,6 +2,7 @@
 # Validates GLB/glTF files with the Khronos glTF-Validator (npm `gltf-validator`, installed
 # on first use into target/npm/, never committed): `scripts/validate_gltf.sh out/*.glb`.
 # Prints each file's errors, warnings and infos; exits 1 if any file has an error.
+# `scripts/validate_gltf.sh --install` installs it and does nothing else (CI's first step).
 set -euo pipefail
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 NPM_DIR=${ENVFIELD_NPM_DIR:-$ROOT/target/npm}
@@ -13,5 +14,6 @@ if [ ! -f "$NPM_DIR/node_modules/gltf-validator/package.json" ]; then
         exit 1
     }
 fi
-[ "$#" -gt 0 ] || { echo "usage: $0 FILE.glb..." >&2; exit 2; }
+[ "${1:-}" = "--install" ] && { echo "gltf-validator $VERSION in $NPM_DIR"; exit 0; }
+[ "$#" -gt 0 ] || { echo "usage: $0 FILE.glb... | --install" >&2; exit 2; }
 VALIDATOR_DIR="$NPM_DIR/node_modules" node "$ROOT/scripts/js/validate_gltf.mjs" "$@"

@@ -74,7 +74,8 @@ impl MotionArgs {
     }
 
     /// Writes what was asked for: the scene `mesh`, the `region` points (drawn on the page,
-    /// hidden at will) and the `actors`, titled `title` on the page. Returns the files written.
+    /// hidden at will) and the `actors`, titled `title` on the page, its walls cut with
+    /// `cut_walls` ([`viewer_page`]). Returns the files written.
     ///
     /// # Errors
     /// Writing fails, or an actor's poses are not finite.
@@ -84,6 +85,7 @@ impl MotionArgs {
         region: &[Point3<f32>],
         actors: &[Actor],
         title: &str,
+        cut_walls: bool,
     ) -> Result<Vec<PathBuf>> {
         let mut written = Vec::new();
         if self.gltf.is_some() || self.html.is_some() {
@@ -94,7 +96,7 @@ impl MotionArgs {
             }
             if let Some(path) = &self.html {
                 let glb = glb_bytes(Some(mesh), region, actors)?;
-                let page = viewer_page(&glb, title, &ThreeJs::find()?)?;
+                let page = viewer_page(&glb, title, &ThreeJs::find()?, cut_walls)?;
                 write_atomic(path, page.as_bytes())
                     .with_context(|| format!("--html {}", path.display()))?;
                 written.push(path.clone());

@@ -1,8 +1,9 @@
 //! A page to watch people move: one self-contained HTML file holding a GLB (the scene, the
 //! region as points, every person animated) and a small viewer on three.js (MIT; fetched by
 //! `scripts/fetch_threejs.sh` into `data/three/` and embedded, so the page opens offline):
-//! orbit camera, play and pause, a time slider, the region shown or hidden. `#t=SECONDS` in
-//! the address opens it paused at that time; `#t=2&region=0` without the region.
+//! orbit camera, play and pause, a time slider, the region shown or hidden, the walls cut.
+//! `#t=SECONDS` in the address opens it paused at that time; `#t=2&region=0&cut=0` without
+//! the region, the walls whole.
 
 use anyhow::{bail, Context, Result};
 use std::path::{Path, PathBuf};
@@ -69,11 +70,13 @@ impl ThreeJs {
     }
 }
 
-/// The page of `glb`, titled `title`.
+/// The page of `glb`, titled `title`; with `cut_walls` the scene is shown cut 1.3 m above its
+/// lowest floor (a room's walls hide no one; a level of several floors wants it off), a box
+/// on the page turns it on and off.
 ///
 /// # Errors
 /// three.js cannot be read.
-pub fn viewer_page(glb: &[u8], title: &str, three: &ThreeJs) -> Result<String> {
+pub fn viewer_page(glb: &[u8], title: &str, three: &ThreeJs, cut_walls: bool) -> Result<String> {
     let escaped: String = title
         .chars()
         .map(|c| match c {
@@ -87,5 +90,6 @@ pub fn viewer_page(glb: &[u8], title: &str, three: &ThreeJs) -> Result<String> {
     Ok(include_str!("viewer.html")
         .replace("__IMPORTMAP__", &three.import_map()?)
         .replace("__TITLE__", &escaped)
+        .replace("__CUT__", if cut_walls { "true" } else { "false" })
         .replace("__GLB__", &base64::encode(glb)))
 }

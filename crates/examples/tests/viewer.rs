@@ -90,7 +90,7 @@ fn the_page_shows_its_people_in_headless_chromium() {
         },
     ];
     let glb = envfield_affordance::glb_bytes(Some(&room()), &[], &actors).unwrap();
-    let page = viewer_page(&glb, "two people", &three).unwrap();
+    let page = viewer_page(&glb, "two people", &three, true).unwrap();
     let dir = tempfile::tempdir().unwrap();
     let html = dir.path().join("page.html");
     std::fs::write(&html, page).unwrap();
@@ -138,4 +138,87 @@ fn keep_for_readme(shot: &Path) {
     if let Some(to) = std::env::var_os("ENVFIELD_KEEP_SHOT") {
         std::fs::copy(shot, to).unwrap();
     }
+}
+
+/// What the examples' `--gltf` and `--bvh` write (through the same [`MotionArgs::write`]) for a
+/// generated room with its region and three people, walking, sitting down and lying down,
+/// passes the Khronos glTF-Validator (npm `gltf-validator`, `scripts/validate_gltf.sh`) with
+/// no error and no warning. Needs node and npm; without them the test says by name that it
+/// did not run, and under CI (`CI=true`) it fails.
+#[test]
+fn what_the_examples_write_passes_the_khronos_validator() {
+    use envfield_affordance::{lie_down, LieConfig};
+    use envfield_examples::MotionArgs;
+    use envfield_scene::{generate_room, RoomConfig};
+    let test = "what_the_examples_write_passes_the_khronos_validator";
+    if Command::new("npm").arg("--version").output().is_err() {
+        return skip(test, "no npm to install gltf-validator with");
+    }
+    let room = generate_room(&RoomConfig::default(), 5).unwrap();
+    let walking = walk(&WalkConfig::default(), 2).unwrap();
+    let seated = sit_down(&SitConfig::default()).unwrap();
+    let lying = lie_down(&LieConfig::default()).unwrap();
+    let actors = [
+        Actor {
+            name: "walking",
+            poses: &walking,
+        },
+        Actor {
+            name: "sitting down",
+            poses: &seated,
+        },
+        Actor {
+            name: "lying down",
+            poses: &lying,
+        },
+    ];
+    let region: Vec<Point3<f32>> = (0..200)
+        .map(|i| {
+            Point3::new(
+                0.5 + (i % 20) as f32 * 0.1,
+                0.5 + (i / 20) as f32 * 0.1,
+                0.9,
+            )
+        })
+        .collect();
+    let dir = tempfile::tempdir().unwrap();
+    let glb = dir.path().join("people.glb");
+    let motion = MotionArgs {
+        gltf: Some(glb.clone()),
+        bvh: Some(dir.path().join("bvh")),
+        html: None,
+    };
+    motion.check(&[]).unwrap();
+    let written = motion
+        .write(&room.scene.to_mesh(), &region, &actors, "room 5", true)
+        .unwrap();
+    assert_eq!(written.len(), 4, "{written:?}");
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scripts/validate_gltf.sh");
+    let out = Command::new("bash").arg(script).arg(&glb).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    eprintln!("{text}{}", String::from_utf8_lossy(&out.stderr));
+    assert!(out.status.success(), "the validator found errors: {text}");
+    assert!(text.contains("0 errors, 0 warnings"), "{text}");
+}
+
+/// An output that names an input of the run (the user's scene) is refused before any work, and
+/// the input is left as it was.
+#[test]
+fn an_output_naming_the_scene_is_refused() {
+    use envfield_examples::MotionArgs;
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("scene.glb");
+    std::fs::write(&scene, b"the user's scene").unwrap();
+    let motion = MotionArgs {
+        gltf: Some(scene.clone()),
+        ..MotionArgs::default()
+    };
+    let e = motion.check(&[scene.as_path()]).unwrap_err().to_string();
+    assert!(e.contains("--gltf") && e.contains("input"), "{e}");
+    assert_eq!(std::fs::read(&scene).unwrap(), b"the user's scene");
+    let motion = MotionArgs {
+        html: Some(dir.path().join("page.htm")),
+        ..MotionArgs::default()
+    };
+    assert!(motion.check(&[]).unwrap_err().to_string().contains(".html"));
 }

@@ -156,6 +156,22 @@ pub fn parse_gltf(
 /// many exporters leave out and nothing here reads. The first few problems, and how many.
 fn validate(root: &gltf::json::Root) -> std::result::Result<(), String> {
     use gltf::json::validation::{Error, Validate};
+    // The crate's check of a primitive's POSITION reads its accessor before checking that the
+    // accessor exists (gltf-json 1.4.1, mesh.rs): check every accessor a primitive names first.
+    let accessors = root.accessors.len();
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let named = primitive
+                .attributes
+                .values()
+                .chain(primitive.indices.as_ref());
+            if let Some(bad) = named.map(|i| i.value()).find(|&i| i >= accessors) {
+                return Err(format!(
+                    "invalid glTF: meshes[{m}].primitives[{p}] names accessor {bad} of {accessors}"
+                ));
+            }
+        }
+    }
     let mut problems = Vec::new();
     root.validate(root, gltf::json::Path::new, &mut |path, error| {
         let path = path().to_string();

@@ -100,4 +100,50 @@ impl Floor {
         let path: Vec<Point3<f32>> = run.path(i).iter().map(|&p| self.world(p)).collect();
         Ok(walk_along(&self.scene, gait, &path, gait.step_length())?)
     }
+
+    /// [`Floor::aligned_walk`] on the run's clock: a frame every `1 / gait.fps` seconds, a
+    /// time step lasting `step_s` seconds, each frame the aligned pose nearest to where the
+    /// run has person `i` then (a person who waits keeps their pose; one who has arrived
+    /// stands at their goal from then on). Everyone's sequences of one run play together, as
+    /// the run had them move; with their checks.
+    ///
+    /// # Errors
+    /// As [`Floor::aligned_walk`]; a `step_s` that is not positive.
+    pub fn timed_walk(
+        &self,
+        run: &CrowdRun,
+        i: usize,
+        gait: &PoseSequence,
+        step_s: f32,
+    ) -> Result<(PoseSequence, Vec<AffordanceReport>)> {
+        if !(step_s.is_finite() && step_s > 0.0) {
+            return Err(RoomsError::InvalidInput(format!(
+                "a time step's seconds must be positive, got {step_s}"
+            )));
+        }
+        let (aligned, reports) = self.aligned_walk(run, i, gait)?;
+        let path: Vec<Point3<f32>> = run.path(i).iter().map(|&p| self.world(p)).collect();
+        let mut arc = vec![0.0f32];
+        for w in path.windows(2) {
+            arc.push(arc[arc.len() - 1] + (w[1] - w[0]).norm());
+        }
+        let steps = path.len() - 1;
+        let per_frame = gait.step_length().max(1e-6);
+        let count = (steps as f32 * step_s * gait.fps).ceil() as usize + 1;
+        let (mut frames, mut supports, mut checks) = (Vec::new(), Vec::new(), Vec::new());
+        for k in 0..count {
+            let u = k as f32 / gait.fps / step_s;
+            let t = (u.floor() as usize).min(steps.saturating_sub(1));
+            let s = match steps {
+                0 => 0.0,
+                _ => arc[t] + (u - t as f32).clamp(0.0, 1.0) * (arc[t + 1] - arc[t]),
+            };
+            let j = ((s / per_frame).round() as usize).min(aligned.frames.len() - 1);
+            frames.push(aligned.frames[j]);
+            supports.push(aligned.supports[j]);
+            checks.push(reports[j].clone());
+        }
+        let timed = PoseSequence::new(gait.fps, aligned.activity, frames, supports)?;
+        Ok((timed, checks))
+    }
 }
