@@ -319,6 +319,23 @@ fn room_nav_and_birdseye_refuse_empty_runs_wrapping_seeds_and_huge_rooms() {
             ),
             "--walks-out",
         );
+        // Motion out: the wrong extension, and the scene itself as the output.
+        let glb = dir.join("people.txt");
+        refuses(
+            run(&nav, &["--gltf", &glb.to_string_lossy(), "--out", &out]),
+            "--gltf",
+        );
+        let mine = dir.join("mine.glb");
+        std::fs::write(&mine, "the user's scene").unwrap();
+        let mine_s = mine.to_string_lossy();
+        refuses(
+            run(
+                &nav,
+                &["--scene", &mine_s, "--gltf", &mine_s, "--out", &out],
+            ),
+            "is an input of this run",
+        );
+        assert_eq!(std::fs::read_to_string(&mine).unwrap(), "the user's scene");
     }
     if let Some(crowd) = example("birdseye_multi") {
         let model = concat!(env!("CARGO_MANIFEST_DIR"), "/models/birdseye.safetensors");

@@ -141,7 +141,7 @@ impl Floor {
             let j = ((s / per_frame).round() as usize).min(aligned.frames.len() - 1);
             frames.push(aligned.frames[j]);
             supports.push(aligned.supports[j]);
-            checks.push(reports[j].clone());
+            checks.push(reports[j]);
         }
         let timed = PoseSequence::new(gait.fps, aligned.activity, frames, supports)?;
         Ok((timed, checks))
