@@ -159,7 +159,14 @@ fn progress(len: u64, what: &str) -> Result<ProgressBar> {
 fn one(args: &Args, vae: &Cvae) -> Result<()> {
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
+    args.scene.protect();
     envfield::grid::check_writable(args.out.join("summary.json"))?;
+    envfield::grid::check_writable(args.out.join("scene.obj")).with_context(|| {
+        format!(
+            "--out {}: the scene is written there as scene.obj",
+            args.out.display()
+        )
+    })?;
     let inputs: Vec<&std::path::Path> = args.scene.scene.iter().map(PathBuf::as_path).collect();
     args.motion.check(&inputs)?;
     let rooms = args.scene.rooms(RoomConfig::default())?;

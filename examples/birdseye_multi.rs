@@ -182,6 +182,7 @@ fn batch(args: &Args, rooms: usize, model: &FieldNet, config: &CrowdConfig) -> R
 fn one_room(args: &Args, model: &FieldNet, config: &CrowdConfig) -> Result<()> {
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
+    args.scene.protect();
     envfield::grid::check_writable(args.out.join("crowd.json"))?;
     let inputs: Vec<&std::path::Path> = args.scene.scene.iter().map(PathBuf::as_path).collect();
     args.motion.check(&inputs)?;

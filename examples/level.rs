@@ -33,6 +33,9 @@ use envfield_examples::MotionArgs;
 use std::path::PathBuf;
 use std::time::Instant;
 
+/// The most columns `level` builds a region from (at 0.25 m, 500 x 500 m).
+const MAX_COLUMNS: f64 = 4.0e6;
+
 #[global_allocator]
 static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
@@ -110,6 +113,12 @@ fn main() -> Result<()> {
     if !(args.budget.is_finite() && args.budget > 0.0 && args.budget <= 10_000.0) {
         bail!("--budget must be in (0, 10000] (got {})", args.budget);
     }
+    if !(args.voxel.is_finite() && (0.05..=2.0).contains(&args.voxel)) {
+        bail!(
+            "--voxel must be in [0.05, 2] m (got {}): a body is about 0.5 m wide",
+            args.voxel
+        );
+    }
     if !args.scene.is_file() {
         bail!(
             "{}: no such level (scripts/fetch_recast_levels.sh fetches Recast's demo levels)",
@@ -118,13 +127,35 @@ fn main() -> Result<()> {
     }
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
+    // Nothing this run writes may replace the level (`--out` holding its scene.obj).
+    envfield::grid::protect_input(&args.scene);
     envfield::grid::check_writable(args.out.join("top.png"))?;
+    envfield::grid::check_writable(args.out.join("scene.obj")).with_context(|| {
+        format!(
+            "--out {}: the scene is written there as scene.obj",
+            args.out.display()
+        )
+    })?;
     args.motion.check(&[args.scene.as_path()])?;
 
     let (scene, report) = read_scene(&args.scene, &ImportConfig::new(args.up, args.units))?;
     eprintln!("{}: {report}", args.scene.display());
     scene.to_mesh().write(args.out.join("scene.obj"))?;
 
+    // One column a voxel: past a few million the region takes many minutes, as a level read
+    // in the wrong units does (an 8 m apartment in centimetres is 800 m wide).
+    if let Some(b) = scene.aabb() {
+        let (w, d) = (b.maxs.x - b.mins.x, b.maxs.y - b.mins.y);
+        let columns = (w / args.voxel).ceil() as f64 * (d / args.voxel).ceil() as f64;
+        if columns > MAX_COLUMNS {
+            bail!(
+                "the level is {w:.0} x {d:.0} m: {columns:.1e} columns of --voxel {} m, more than \
+                 the {MAX_COLUMNS:.0e} a region is built from in minutes. Is it in centimetres \
+                 (--units cm) or millimetres (--units mm)? Otherwise raise --voxel.",
+                args.voxel
+            );
+        }
+    }
     // The region: standing torsos over every up-facing surface, judged by the filter.
     let config = RegionConfig {
         voxel: args.voxel,

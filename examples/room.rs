@@ -55,7 +55,13 @@ fn main() -> Result<()> {
     let args = Args::parse();
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
-    envfield::grid::check_writable(args.out.join("scene.obj"))?;
+    args.scene.protect();
+    envfield::grid::check_writable(args.out.join("scene.obj")).with_context(|| {
+        format!(
+            "--out {}: the scene is written there as scene.obj",
+            args.out.display()
+        )
+    })?;
     let t = Instant::now();
     // The scene, its size in metres and the kinds of its furniture (none known for a file).
     let rooms = args.scene.rooms(RoomConfig::default())?;

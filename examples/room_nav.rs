@@ -34,7 +34,6 @@ use envfield::scene::RoomConfig;
 use envfield::vae::Cvae;
 use envfield_examples::{MotionArgs, Navmesh, SceneArgs};
 use indicatif::{ProgressBar, ProgressStyle};
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -180,6 +179,13 @@ fn check(args: &Args) -> Result<()> {
             args.field_steps
         );
     }
+    if args.big_budget > 1_000_000 {
+        bail!(
+            "--big-budget is at most 1000000 RRT* iterations (got {}): the table's runs take \
+             0.2 s per 20000",
+            args.big_budget
+        );
+    }
     for (flag, b) in [("--budget", args.budget), ("--sit-budget", args.sit_budget)] {
         if !(b.is_finite() && b > 0.0 && b <= 10_000.0) {
             bail!("{flag} must be in (0, 10000] (got {b})");
@@ -193,7 +199,14 @@ fn main() -> Result<()> {
     check(&args)?;
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
+    args.scene.protect();
     envfield::grid::check_writable(args.out.join("top.png"))?;
+    envfield::grid::check_writable(args.out.join("scene.obj")).with_context(|| {
+        format!(
+            "--out {}: the scene is written there as scene.obj",
+            args.out.display()
+        )
+    })?;
     let inputs: Vec<&Path> = args.scene.scene.iter().map(PathBuf::as_path).collect();
     args.motion.check(&inputs)?;
     let vae_file = args
@@ -205,15 +218,13 @@ fn main() -> Result<()> {
     let rooms = args.scene.rooms(RoomConfig::default())?;
     let planners = RoomPlanner::chosen(args.planners.as_deref()).context("--planners")?;
     let needs_net = planners.iter().any(|p| p.learned());
-    let mut walks_out = args
-        .walks_out
-        .as_ref()
-        .map(|p| {
-            std::fs::File::create(p)
-                .map(std::io::BufWriter::new)
-                .with_context(|| format!("--walks-out: creating {}", p.display()))
-        })
-        .transpose()?;
+    // The records are kept and written at the end, atomically: a run that fails leaves the
+    // file as it was, and a link there is replaced, never written through.
+    if let Some(p) = &args.walks_out {
+        envfield::grid::check_writable(p)
+            .with_context(|| format!("--walks-out {}", p.display()))?;
+    }
+    let mut walks_out = args.walks_out.as_ref().map(|_| String::new());
     let mut tally = Tally::default();
     // The first room's people, for --gltf, --bvh and --html: one per pair.
     let mut people: Vec<(String, PoseSequence)> = Vec::new();
@@ -282,7 +293,8 @@ fn main() -> Result<()> {
             if let Some(w) = walks_out.as_mut() {
                 for r in &runs {
                     let line = r.record(seed, i, pair.kind);
-                    writeln!(w, "{line}").context("--walks-out: writing")?;
+                    w.push_str(&line.to_string());
+                    w.push('\n');
                 }
             }
             match &generated {
@@ -304,8 +316,9 @@ fn main() -> Result<()> {
         println!("\nTable 4: aligned poses, percent supported / collision-free / valid");
         print!("{table4}");
     }
-    if let Some(mut w) = walks_out {
-        w.flush().context("--walks-out: writing")?;
+    if let (Some(w), Some(p)) = (walks_out, &args.walks_out) {
+        envfield::grid::write_atomic(p, w.as_bytes())
+            .with_context(|| format!("--walks-out {}", p.display()))?;
     }
     if let Some((mesh, points)) = first_room {
         let actors: Vec<Actor> = people

@@ -142,6 +142,12 @@ fn main() -> Result<()> {
     if args.mazes > 1_000_000 || args.trajectories > 1000 || args.every == 0 {
         bail!("--mazes is at most 1000000, --trajectories at most 1000, --every at least 1");
     }
+    if args.eval_mazes > 100_000 {
+        bail!(
+            "--eval-mazes is at most 100000 (got {}): the held-out mazes are made before training",
+            args.eval_mazes
+        );
+    }
     // The outputs and the test set are checked before any work.
     if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
@@ -166,6 +172,14 @@ fn main() -> Result<()> {
     let mut trainer = trainer(&args, cfg)?;
     let total = trainer.total_steps(&data);
     let last = args.max_steps.map_or(total, |m| m.min(total));
+    if let (Some(p), true) = (&args.resume, last <= trainer.step()) {
+        bail!(
+            "--max-steps {last} trains nothing: {} is at step {} already ({} is left as it is)",
+            p.display(),
+            trainer.step(),
+            args.out.display()
+        );
+    }
     eprintln!(
         "VIN K={} {} parameters: {} maps, {} rows, {} states; {} steps per epoch, from step {} \
          to {last}",

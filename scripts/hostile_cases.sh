@@ -4,7 +4,8 @@
 # BIN_DIR holds built example binaries (target/release/examples); SCRATCH_DIR is written to.
 # Prints one line per case: id, exit status, the last line printed (tab-separated). Each case
 # runs under a time limit and a 6 GB address-space limit, so an unbounded allocation aborts.
-# ONLY=36 runs only the cases of issue 36 (the entry points added since the first sweep).
+# ONLY=36 runs only the cases of issue 36 (the entry points added since the first sweep);
+# ONLY=56 only those of issue 56 fixed so far (data loss, panics, hangs).
 BIN=$(cd "$1" && pwd); T=$2; mkdir -p "$T"; T=$(cd "$T" && pwd)
 cd "$(dirname "$0")/.."
 export MIMALLOC_PURGE_DELAY=-1 RUST_BACKTRACE=0
@@ -25,7 +26,7 @@ n=2000
 rows=['S'+'.'*(n-1)]+['.'*n for _ in range(n-2)]+['.'*(n-1)+'G']
 open('$T/big.txt','w').write('\n'.join(rows)+'\n')"
 run() { id=$1; shift; lim=$1; shift; out=$( (ulimit -v 6000000; timeout $lim "$@") 2>&1 ); rc=$?; last=$(printf '%s' "$out" | grep -v '^\s*$' | grep -v "at \./\|^ *[0-9]*: \|^stack backtrace\|note: run with" | tail -1 | cut -c1-150); printf '%s\t%s\t%s\n' "$id" "$rc" "$last"; }
-if [ "${ONLY:-}" != 36 ]; then
+if [ -z "${ONLY:-}" ]; then
 run 1 60 $BIN/train_maze --size 8 --mazes 0 --steps 2 --out $T/m.safetensors
 run 2a 20 $BIN/fmm $T/grid.txt --repeat 18446744073709551615
 run 2b 20 $BIN/fmm $T/grid.txt --repeat 100000000000
@@ -71,6 +72,7 @@ run 15b 20 $BIN/fmm $T/float.npy
 run 15c 60 $BIN/train_maze --size 8 --mazes 4 --steps 2 --lr=-1 --out $T/m15.safetensors
 run 16 120 $BIN/maze_nav --generator perfect --size 41 --count 20 --png $T/out.png --paths $T/paths.json
 fi
+if [ -z "${ONLY:-}" ] || [ "${ONLY:-}" = 36 ]; then
 
 # Issue 36: the room and crowd entry points.
 huge=18446744073709551615
@@ -105,3 +107,36 @@ if [ -f data/recast/dungeon.obj ]; then
     run 36-6b 300 $BIN/level --scene data/recast/nav_test.obj --json --out $T/lv6b
 fi
 run 36-18 60 $BIN/train_birdseye --rooms 2 --eval-rooms 2 --steps 10 --resume --out $T/be18.safetensors
+
+fi
+if [ -z "${ONLY:-}" ] || [ "${ONLY:-}" = 56 ]; then
+# Issue 56: nothing a user saved is lost.
+huge=18446744073709551615
+printf 'v 0 0 0\nv 4 0 0\nv 4 3 0\nv 0 3 0\nf 1 2 3\nf 1 3 4\n' > $T/scene.obj; cp $T/scene.obj $T/scene.orig
+echo "old records" > $T/walks.jsonl
+run 56-1a 60 $BIN/room_nav --scene $T/missing.obj --walks-out $T/walks.jsonl --out $T/n1
+printf '56-1a-kept\t%s\t%s\n' 0 "$(cat $T/walks.jsonl)"
+run 56-1b 60 $BIN/room_nav --scene $T/scene.obj --walks-out $T/scene.obj --out $T/n1
+run 56-2a 60 $BIN/room --scene $T/scene.obj --out $T
+run 56-2b 60 $BIN/accessible --scene $T/scene.obj --no-field --out $T
+run 56-2c 60 $BIN/level --scene $T/scene.obj --up z --out $T
+run 56-2d 60 $BIN/room_nav --scene $T/scene.obj --out $T
+printf '56-2-kept\t%s\t%s\n' "$(cmp -s $T/scene.obj $T/scene.orig; echo $?)" "$(cmp -s $T/scene.obj $T/scene.orig && echo scene kept || echo scene replaced)"
+run 56-3a 120 $BIN/train_vin --size 8 --mazes 8 --eval-mazes 4 --max-steps 3 --out $T/v56.safetensors
+cp $T/v56.safetensors $T/v56.orig
+run 56-3b 120 $BIN/train_vin --size 8 --mazes 8 --eval-mazes 4 --max-steps 3 --resume $T/v56.safetensors.ckpt --out $T/v56.safetensors
+printf '56-3b-kept\t%s\t%s\n' "$(cmp -s $T/v56.safetensors $T/v56.orig; echo $?)" "$(cmp -s $T/v56.safetensors $T/v56.orig && echo file kept || echo file replaced)"
+run 56-3c 120 $BIN/train_maze --arch plain --size 8 --steps 3 --out $T/m56.safetensors
+cp $T/m56.safetensors $T/m56.orig
+run 56-3d 120 $BIN/train_maze --arch plain --size 8 --steps 3 --resume $T/m56.safetensors.ckpt --out $T/m56.safetensors
+printf '56-3d-kept\t%s\t%s\n' "$(cmp -s $T/m56.safetensors $T/m56.orig; echo $?)" "$(cmp -s $T/m56.safetensors $T/m56.orig && echo file kept || echo file replaced)"
+# Panics, aborts and hangs.
+printf 'v 0 0 0\nv 4e20 0 0\nv 4e20 3 0\nf 1 2 3\n' > $T/far.obj
+run 56-4a 60 $BIN/room --scene $T/far.obj --out $T/r4
+cp $T/scene.orig $T/unit.obj
+run 56-4b 60 $BIN/room --scene $T/unit.obj --units 1e30 --out $T/r4
+run 56-5 60 $BIN/train_vin --eval-mazes $huge --out $T/v5.safetensors
+printf 'v 0 0 0\nv 800 0 0\nv 800 600 0\nv 0 600 0\nf 1 2 3\nf 1 3 4\n' > $T/wide.obj
+run 56-6 60 $BIN/level --scene $T/wide.obj --up z --out $T/l6
+run 56-7 60 $BIN/room_nav --big-budget 1000000000 --out $T/n7
+fi

@@ -705,3 +705,149 @@ fn apartments_refuses_bad_counts_folders_and_weights() {
     refuses_usage(run(&apts, &["--half", "both-and-more"]), "--half");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Issue 56, what a user saved is never lost: a resume that would train nothing refuses and
+/// keeps the model (train_vin, train_maze); `--walks-out` is written only at the end and never
+/// onto the scene; an `--out` folder holding the scene as `scene.obj` is refused before any
+/// work (accessible, room_nav, level, room). And the panics and hangs of that sweep: a scene
+/// reaching 1e20 m, an unbounded `--big-budget`, `--eval-mazes`, a level in centimetres.
+#[test]
+fn nothing_a_user_saved_is_lost_and_far_scenes_are_refused() {
+    let dir = scratch("saved");
+    let d = |name: &str| dir.join(name).to_string_lossy().into_owned();
+    if let Some(vin) = example("train_vin") {
+        let out = d("v.safetensors");
+        let base = ["--size", "8", "--mazes", "8", "--eval-mazes", "4"];
+        let first = run(
+            &vin,
+            &[&base[..], &["--max-steps", "3", "--out", &out]].concat(),
+        );
+        assert!(
+            first.status.success(),
+            "{}",
+            String::from_utf8_lossy(&first.stderr)
+        );
+        let before = std::fs::read(&out).unwrap();
+        let ckpt = format!("{out}.ckpt");
+        for steps in ["3", "2"] {
+            let args = [
+                &base[..],
+                &["--resume", &ckpt, "--max-steps", steps, "--out", &out],
+            ];
+            refuses(run(&vin, &args.concat()), "trains nothing");
+        }
+        assert_eq!(std::fs::read(&out).unwrap(), before);
+        refuses(
+            run(
+                &vin,
+                &["--eval-mazes", "18446744073709551615", "--out", &out],
+            ),
+            "--eval-mazes",
+        );
+    }
+    if let Some(train) = example("train_maze") {
+        let out = d("m.safetensors");
+        let base = ["--arch", "plain", "--size", "8"];
+        let first = run(
+            &train,
+            &[&base[..], &["--steps", "3", "--out", &out]].concat(),
+        );
+        assert!(
+            first.status.success(),
+            "{}",
+            String::from_utf8_lossy(&first.stderr)
+        );
+        let before = std::fs::read(&out).unwrap();
+        let ckpt = format!("{out}.ckpt");
+        let args = [
+            &base[..],
+            &["--steps", "3", "--resume", &ckpt, "--out", &out],
+        ];
+        refuses(run(&train, &args.concat()), "trains nothing");
+        assert_eq!(std::fs::read(&out).unwrap(), before);
+    }
+    // A user's scene, named scene.obj, in the folder given as --out.
+    let scene = dir.join("scene.obj");
+    let text = "v 0 0 0\nv 4 0 0\nv 4 3 0\nv 0 3 0\nf 1 2 3\nf 1 3 4\n";
+    std::fs::write(&scene, text).unwrap();
+    let (scene_s, out_s) = (scene.to_string_lossy().into_owned(), d(""));
+    for name in ["accessible", "room_nav", "room"] {
+        if let Some(bin) = example(name) {
+            refuses(run(&bin, &["--scene", &scene_s, "--out", &out_s]), "--out");
+        }
+    }
+    if let Some(level) = example("level") {
+        refuses(
+            run(&level, &["--scene", &scene_s, "--up", "z", "--out", &out_s]),
+            "--out",
+        );
+    }
+    if let Some(nav) = example("room_nav") {
+        // --walks-out onto the scene; and a run that fails keeps an old --walks-out file.
+        let o = d("nav");
+        refuses(
+            run(
+                &nav,
+                &["--scene", &scene_s, "--walks-out", &scene_s, "--out", &o],
+            ),
+            "--walks-out",
+        );
+        let walks = dir.join("walks.jsonl");
+        std::fs::write(&walks, "old records\n").unwrap();
+        let missing = d("missing.obj");
+        let args = [
+            "--scene",
+            &missing,
+            "--walks-out",
+            &walks.to_string_lossy(),
+            "--out",
+            &o,
+        ];
+        refuses(run(&nav, &args), "missing.obj");
+        assert_eq!(std::fs::read_to_string(&walks).unwrap(), "old records\n");
+        refuses(
+            run(&nav, &["--big-budget", "1000000000", "--out", &o]),
+            "--big-budget",
+        );
+    }
+    assert_eq!(std::fs::read_to_string(&scene).unwrap(), text);
+    // Coordinates reaching 1e20 m: refused naming the vertex, never a panic in parry3d.
+    let far = dir.join("far.obj");
+    std::fs::write(&far, "v 0 0 0\nv 4e20 0 0\nv 4e20 3 0\nf 1 2 3\n").unwrap();
+    if let Some(room) = example("room") {
+        refuses(
+            run(
+                &room,
+                &["--scene", &far.to_string_lossy(), "--out", &d("r")],
+            ),
+            "vertex 1",
+        );
+    }
+    // A level 800 m wide (an apartment in centimetres, read as metres): refused at once,
+    // naming --units, where it built millions of columns for minutes.
+    let wide = dir.join("wide.obj");
+    std::fs::write(
+        &wide,
+        "v 0 0 0\nv 800 0 0\nv 800 600 0\nv 0 600 0\nf 1 2 3\nf 1 3 4\n",
+    )
+    .unwrap();
+    if let Some(level) = example("level") {
+        let t = std::time::Instant::now();
+        refuses(
+            run(
+                &level,
+                &[
+                    "--scene",
+                    &wide.to_string_lossy(),
+                    "--up",
+                    "z",
+                    "--out",
+                    &d("l"),
+                ],
+            ),
+            "--units",
+        );
+        assert!(t.elapsed().as_secs() < 60);
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -76,6 +76,16 @@ fn main() -> Result<()> {
                 eprintln!("{note}");
             }
             eprintln!("resumed {} at step {}", path.display(), t.step());
+            let stop = args.stop_at.map_or(args.steps, |s| s.min(args.steps));
+            if stop <= t.step() {
+                bail!(
+                    "--steps {} trains nothing: {} is at step {} already ({} is left as it is)",
+                    stop,
+                    path.display(),
+                    t.step(),
+                    args.out.display()
+                );
+            }
             Some(t)
         }
         None => None,

@@ -38,8 +38,19 @@ pub struct SceneArgs {
 }
 
 impl SceneArgs {
+    /// Protects the scene file (`--scene`) from every write of this run
+    /// ([`envfield_grid::protect_input`]): call it before checking the outputs, so that an
+    /// output naming the scene, or an `--out` folder holding it under a name the example
+    /// writes, is refused before any work. [`SceneArgs::read`] does it too.
+    pub fn protect(&self) {
+        if let Some(file) = &self.scene {
+            envfield_grid::protect_input(file);
+        }
+    }
+
     /// The scene file, read and turned to metres and z up, with what the import did printed
-    /// to stderr; `None` without `--scene`. With `samples`, a warning when that many torso
+    /// to stderr, and protected from every write of this run
+    /// ([`envfield_grid::protect_input`]); `None` without `--scene`. With `samples`, a warning when that many torso
     /// samples are too few for the scene's floor.
     ///
     /// # Errors
@@ -48,6 +59,7 @@ impl SceneArgs {
         let Some(file) = &self.scene else {
             return Ok(None);
         };
+        self.protect();
         let (scene, report) = read_scene(file, &ImportConfig::for_file(file, self.up, self.units))
             .with_context(|| format!("reading the scene {}", file.display()))?;
         eprintln!("{}: {report}", file.display());

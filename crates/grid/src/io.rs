@@ -17,8 +17,11 @@ fn folder_of(path: &Path) -> PathBuf {
 /// at `path` is replaced rather than followed. A temporary file that a killed process left in
 /// the folder (`.envfield-*.tmp`, untouched for ten minutes) is removed first.
 ///
+/// The file at `path` must not be an input of this run ([`protect_input`]).
+///
 /// # Errors
-/// [`GridError::Io`] naming the path; [`GridError::Invalid`] for a path that names a folder.
+/// [`GridError::Io`] naming the path; [`GridError::Invalid`] for a path that names a folder
+/// or an input.
 pub fn write_atomic(path: impl AsRef<Path>, bytes: &[u8]) -> Result<()> {
     let path = path.as_ref();
     check_file_path(path)?;
@@ -74,8 +77,83 @@ fn remove_stale_temporaries(dir: &Path) {
     }
 }
 
-/// That `path` names a file (not a folder) in a folder that exists.
+/// The files this process read its input from and must never write over
+/// ([`protect_input`]), by identity (device and inode on Unix, the canonical path elsewhere).
+static INPUTS: std::sync::Mutex<Vec<(FileId, PathBuf)>> = std::sync::Mutex::new(Vec::new());
+
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+#[cfg(unix)]
+struct FileId(u64, u64);
+#[derive(Clone, PartialEq, Eq, Debug)]
+#[cfg(not(unix))]
+struct FileId(PathBuf);
+
+/// The identity of the file at `path` itself (a link is not followed): `None` for no file.
+fn file_id(path: &Path, follow: bool) -> Option<FileId> {
+    let meta = if follow {
+        std::fs::metadata(path)
+    } else {
+        std::fs::symlink_metadata(path)
+    }
+    .ok()?;
+    if !meta.is_file() {
+        return None;
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        Some(FileId(meta.dev(), meta.ino()))
+    }
+    #[cfg(not(unix))]
+    {
+        path.canonicalize().ok().map(FileId)
+    }
+}
+
+/// Marks the file at `path` as an input of this process: from now on [`write_atomic`] and
+/// [`check_writable`] refuse to write over it, under any name (a second path to the same
+/// file, a hard link); a symbolic link to it may still be replaced, which leaves it as it was.
+/// An example calls it on every file a user gave it to read, so that no output flag, no
+/// `--out` folder and no file name written into one can replace what the user saved.
+/// A path that names no file is ignored.
+pub fn protect_input(path: impl AsRef<Path>) {
+    let path = path.as_ref();
+    if let Some(id) = file_id(path, true) {
+        let mut inputs = INPUTS
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        if !inputs.iter().any(|(i, _)| *i == id) {
+            inputs.push((id, path.to_path_buf()));
+        }
+    }
+}
+
+/// Refuses `path` when the file there is a protected input ([`protect_input`]).
+fn check_not_input(path: &Path) -> Result<()> {
+    let Some(id) = file_id(path, false) else {
+        return Ok(());
+    };
+    let inputs = INPUTS
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    match inputs.iter().find(|(i, _)| *i == id) {
+        Some((_, input)) => Err(GridError::Invalid(format!(
+            "{} is {}, an input of this run: not written over (choose another file or folder)",
+            path.display(),
+            if input == path {
+                "the file read".to_string()
+            } else {
+                format!("the file read as {}", input.display())
+            }
+        ))),
+        None => Ok(()),
+    }
+}
+
+/// That `path` names a file (not a folder) in a folder that exists, and not an input of this
+/// run ([`protect_input`]).
 fn check_file_path(path: &Path) -> Result<()> {
+    check_not_input(path)?;
     let text = path.as_os_str().to_string_lossy();
     if path.file_name().is_none() || path.is_dir() || text.ends_with('/') {
         return Err(GridError::Invalid(format!(
@@ -97,7 +175,8 @@ fn check_file_path(path: &Path) -> Result<()> {
 }
 
 /// Checks, before any work, that a file could be written at `path`: it names a file (not a
-/// folder), its folder exists, and a file can be created there. Call it on output paths
+/// folder) that is not an input of this run ([`protect_input`]), its folder exists, and a
+/// file can be created there. Call it on output paths
 /// before a long computation, so a typo fails at once rather than after the work.
 ///
 /// # Errors
@@ -116,6 +195,36 @@ pub fn check_writable(path: impl AsRef<Path>) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A protected input is never written over, under its own name or another path to it (a
+    /// hard link); a symbolic link to it is replaced, leaving it as it was.
+    #[test]
+    fn an_input_is_never_written_over() {
+        let d = dir("inputs");
+        let input = d.join("scene.obj");
+        std::fs::write(&input, b"the user's scene").unwrap();
+        protect_input(&input);
+        let e = write_atomic(&input, b"re-export").unwrap_err().to_string();
+        assert!(e.contains("an input of this run"), "{e}");
+        assert!(check_writable(&input).is_err());
+        let other = d.join("./scene.obj");
+        assert!(write_atomic(&other, b"x").is_err());
+        let hard = d.join("hard.obj");
+        std::fs::hard_link(&input, &hard).unwrap();
+        assert!(write_atomic(&hard, b"x")
+            .unwrap_err()
+            .to_string()
+            .contains("scene.obj"));
+        #[cfg(unix)]
+        {
+            let link = d.join("link.obj");
+            std::os::unix::fs::symlink(&input, &link).unwrap();
+            write_atomic(&link, b"new").unwrap();
+            assert_eq!(std::fs::read(&link).unwrap(), b"new");
+        }
+        assert_eq!(std::fs::read(&input).unwrap(), b"the user's scene");
+        write_atomic(d.join("other.obj"), b"fine").unwrap();
+    }
 
     fn dir(name: &str) -> PathBuf {
         let d = std::env::temp_dir().join(format!("envfield-{name}-{}", std::process::id()));

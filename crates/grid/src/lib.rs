@@ -63,7 +63,7 @@ pub use ensemble::Ensemble;
 pub use error::{GridError, Result};
 pub use field::{sample_finite_within, Field2, Field3};
 pub use grid::{Grid2, Grid3};
-pub use io::{check_writable, write_atomic};
+pub use io::{check_writable, protect_input, write_atomic};
 pub use maze::{format_mazes, parse_mazes, read_mazes, write_mazes, Maze};
 pub use model::{ContinuousField2, ContinuousField3, FieldModel, Point3m};
 pub use moves::{MoveRule, Neighbourhood2, Neighbourhood3, DIRECTIONS_8};

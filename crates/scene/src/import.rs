@@ -205,6 +205,9 @@ pub fn import_mesh(
         vertices: mesh.vertices.iter().map(to_frame).collect(),
         triangles: mesh.triangles.clone(),
     };
+    out.validate(&format!(
+        "the mesh in metres (--units: {scale:e} m per unit)"
+    ))?;
     let mut warnings = Vec::new();
     // Flat surfaces by the axis they face: a scene is mostly floors, seats and table tops.
     let mut facing = [0f32; 3];
@@ -254,10 +257,18 @@ pub fn import_mesh(
     }
     let width = (hi.x - lo.x).max(hi.y - lo.y);
     if width > WIDEST_ROOM {
-        warnings.push(format!(
-            "the scene is {width:.0} m wide: is it in centimetres (--units cm) or millimetres \
-             (--units mm)?"
-        ));
+        warnings.push(match stray_vertex(&out.vertices) {
+            Some((i, p, core)) => format!(
+                "the scene is {width:.0} m wide, but all but a few vertices lie within \
+                 {core:.1} m: vertex {i} at ({:.1}, {:.1}, {:.1}) m is a stray piece far from the \
+                 rest (remove it from the file)",
+                p.x, p.y, p.z
+            ),
+            None => format!(
+                "the scene is {width:.0} m wide: is it in centimetres (--units cm) or \
+                 millimetres (--units mm)?"
+            ),
+        });
     }
     let shift = Vector3::new(-lo.x, -lo.y, -floor_z);
     for v in &mut out.vertices {
@@ -290,6 +301,29 @@ pub fn read_scene(
     let (mesh, mut report) = import_mesh(&mesh, config)?;
     report.parts = parts;
     Ok((crate::Scene::from_mesh("scene", &mesh)?, report))
+}
+
+/// When the scene's x-y extent comes from a few far vertices: the farthest from the middle of
+/// the rest, where it is, and how wide the rest is (the 0.5th to 99.5th percentile on x and
+/// y, under [`WIDEST_ROOM`]).
+fn stray_vertex(vertices: &[Point3<f32>]) -> Option<(usize, Point3<f32>, f32)> {
+    let band = |axis: usize| {
+        let mut v: Vec<f32> = vertices.iter().map(|p| p[axis]).collect();
+        v.sort_by(f32::total_cmp);
+        let at = |q: f32| v[((v.len() - 1) as f32 * q).round() as usize];
+        (at(0.005), at(0.995))
+    };
+    let (x, y) = (band(0), band(1));
+    let core = (x.1 - x.0).max(y.1 - y.0);
+    if core > WIDEST_ROOM {
+        return None;
+    }
+    let middle = ((x.0 + x.1) / 2.0, (y.0 + y.1) / 2.0);
+    let (i, p) = vertices.iter().enumerate().max_by(|a, b| {
+        let d = |p: &Point3<f32>| (p.x - middle.0).hypot(p.y - middle.1);
+        d(a.1).total_cmp(&d(b.1))
+    })?;
+    Some((i, *p, core))
 }
 
 /// The floor's height from the horizontal faces, binned every 2 cm: the lowest band holding

@@ -19,6 +19,11 @@ pub struct MeshPart {
     pub triangles: std::ops::Range<usize>,
 }
 
+/// The largest coordinate a mesh may hold on any axis (in its own units; metres once
+/// imported): 1e6, a thousand kilometres, past which `f32` steps are coarser than 6 cm and the
+/// geometry library's bounding volumes lose their meaning.
+pub const MAX_COORDINATE: f32 = 1.0e6;
+
 /// A triangle soup with shared vertices: what OBJ and PLY files hold.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct TriangleMesh {
@@ -83,7 +88,8 @@ impl TriangleMesh {
         (b - a).cross(&(c - a)).norm() / 2.0
     }
 
-    /// Checks that there is a triangle, every vertex is finite and every index in range.
+    /// Checks that there is a triangle, every vertex is finite and within [`MAX_COORDINATE`]
+    /// of the origin on each axis, and every index in range.
     ///
     /// # Errors
     /// [`SceneError::EmptyMesh`] or [`SceneError::InvalidGeometry`] naming the vertex or triangle.
@@ -98,6 +104,19 @@ impl TriangleMesh {
         {
             return Err(SceneError::InvalidGeometry(format!(
                 "{what}: vertex {i} is not finite"
+            )));
+        }
+        if let Some((i, v)) = self
+            .vertices
+            .iter()
+            .enumerate()
+            .find(|(_, v)| v.iter().any(|c| c.abs() > MAX_COORDINATE))
+        {
+            return Err(SceneError::InvalidGeometry(format!(
+                "{what}: vertex {i} at ({:e}, {:e}, {:e}) lies beyond {MAX_COORDINATE:e} on an \
+                 axis, where single precision cannot tell a centimetre apart: remove the stray \
+                 piece, or give the right --units",
+                v.x, v.y, v.z
             )));
         }
         let n = self.vertices.len() as u32;

@@ -256,3 +256,54 @@ proptest! {
         prop_assert!(a.0.abs_diff(b.0) * 100 <= a.0, "{a:?} against {b:?}");
     }
 }
+
+/// Coordinates no geometry library should see are refused before it does, naming the vertex;
+/// a stray piece far from a room (within those bounds) is named in the warning, not taken
+/// for centimetres.
+#[test]
+fn far_coordinates_are_refused_and_stray_pieces_named() {
+    let room = generate_room(&RoomConfig::default(), 1)
+        .unwrap()
+        .scene
+        .to_mesh();
+    // A valid OBJ whose coordinates reach 1e20 m: once a panic inside parry3d.
+    let mut far = room.clone();
+    for v in &mut far.vertices {
+        v.x *= 1e20;
+    }
+    let e = import_mesh(&far, &ImportConfig::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("vertex") && e.contains("beyond"), "{e}");
+    // One stray triangle at x = 1e20 m beside a normal room: once a 36 PB allocation.
+    let mut stray = room.clone();
+    let n = stray.vertices.len() as u32;
+    stray.vertices.extend([
+        Point3::new(1e20, 0.0, 0.0),
+        Point3::new(1e20, 0.01, 0.0),
+        Point3::new(1e20, 0.0, 0.01),
+    ]);
+    stray.triangles.push([n, n + 1, n + 2]);
+    let e = import_mesh(&stray, &ImportConfig::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains(&format!("vertex {n}")), "{e}");
+    // A normal room read with --units 1e20: the flag is named.
+    let e = import_mesh(&room, &ImportConfig::new(UpAxis::Z, Units::Scale(1e20)))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("--units"), "{e}");
+    // A 1 cm triangle 5 km away: named as a stray piece, not blamed on the units.
+    let mut five_km = room.clone();
+    five_km.vertices.extend([
+        Point3::new(5000.0, 0.0, 0.0),
+        Point3::new(5000.01, 0.0, 0.0),
+        Point3::new(5000.0, 0.01, 0.0),
+    ]);
+    five_km.triangles.push([n, n + 1, n + 2]);
+    let (_, report) = import_mesh(&five_km, &ImportConfig::default()).unwrap();
+    let w = report.warnings.join(" | ");
+    let named = (n..n + 3).any(|i| w.contains(&format!("vertex {i} ")));
+    assert!(w.contains("stray") && named, "{w}");
+    assert!(!w.contains("--units"), "{w}");
+}
