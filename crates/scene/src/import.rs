@@ -205,7 +205,8 @@ pub fn import_mesh(
         vertices: mesh.vertices.iter().map(to_frame).collect(),
         triangles: mesh.triangles.clone(),
     };
-    out.validate(&format!(
+    out.validate("the mesh in metres")?;
+    out.check_extent(&format!(
         "the mesh in metres (--units: {scale:e} m per unit)"
     ))?;
     let mut warnings = Vec::new();

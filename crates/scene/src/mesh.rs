@@ -19,8 +19,8 @@ pub struct MeshPart {
     pub triangles: std::ops::Range<usize>,
 }
 
-/// The largest coordinate a mesh may hold on any axis (in its own units; metres once
-/// imported): 1e6, a thousand kilometres, past which `f32` steps are coarser than 6 cm and the
+/// The largest coordinate a scene in metres may hold on any axis
+/// ([`TriangleMesh::check_extent`]): 1e6, a thousand kilometres, past which `f32` steps are coarser than 6 cm and the
 /// geometry library's bounding volumes lose their meaning.
 pub const MAX_COORDINATE: f32 = 1.0e6;
 
@@ -88,8 +88,7 @@ impl TriangleMesh {
         (b - a).cross(&(c - a)).norm() / 2.0
     }
 
-    /// Checks that there is a triangle, every vertex is finite and within [`MAX_COORDINATE`]
-    /// of the origin on each axis, and every index in range.
+    /// Checks that there is a triangle, every vertex is finite and every index in range.
     ///
     /// # Errors
     /// [`SceneError::EmptyMesh`] or [`SceneError::InvalidGeometry`] naming the vertex or triangle.
@@ -106,19 +105,7 @@ impl TriangleMesh {
                 "{what}: vertex {i} is not finite"
             )));
         }
-        if let Some((i, v)) = self
-            .vertices
-            .iter()
-            .enumerate()
-            .find(|(_, v)| v.iter().any(|c| c.abs() > MAX_COORDINATE))
-        {
-            return Err(SceneError::InvalidGeometry(format!(
-                "{what}: vertex {i} at ({:e}, {:e}, {:e}) lies beyond {MAX_COORDINATE:e} on an \
-                 axis, where single precision cannot tell a centimetre apart: remove the stray \
-                 piece, or give the right --units",
-                v.x, v.y, v.z
-            )));
-        }
+
         let n = self.vertices.len() as u32;
         if let Some(i) = self
             .triangles
@@ -131,6 +118,29 @@ impl TriangleMesh {
             )));
         }
         Ok(())
+    }
+
+    /// Checks that every vertex lies within [`MAX_COORDINATE`] metres of the origin on each
+    /// axis: what a scene in metres must hold before the geometry library sees it
+    /// ([`Part::mesh`](crate::Part::mesh) and [`import_mesh`](crate::import_mesh) call it).
+    ///
+    /// # Errors
+    /// [`SceneError::InvalidGeometry`] naming the first vertex beyond, and where it is.
+    pub fn check_extent(&self, what: &str) -> Result<()> {
+        match self
+            .vertices
+            .iter()
+            .enumerate()
+            .find(|(_, v)| v.iter().any(|c| c.abs() > MAX_COORDINATE))
+        {
+            Some((i, v)) => Err(SceneError::InvalidGeometry(format!(
+                "{what}: vertex {i} at ({:e}, {:e}, {:e}) m lies beyond {MAX_COORDINATE:e} m on \
+                 an axis, where single precision cannot tell a centimetre apart: remove the \
+                 stray piece, or give the right --units",
+                v.x, v.y, v.z
+            ))),
+            None => Ok(()),
+        }
     }
 
     /// Reads an OBJ, PLY or glTF (`.gltf`, `.glb`) file, chosen by the extension, in the

@@ -206,6 +206,7 @@ impl Part {
     /// [`SceneError::EmptyMesh`] / [`SceneError::InvalidGeometry`] from [`TriangleMesh::validate`].
     pub fn mesh(mesh: &TriangleMesh) -> Result<Self> {
         mesh.validate("mesh")?;
+        mesh.check_extent("mesh")?;
         let trimesh = TriMesh::with_flags(
             mesh.vertices.clone(),
             mesh.triangles.clone(),
