@@ -86,14 +86,16 @@ impl Navmesh {
     pub fn build(scene: &Scene, config: &NavmeshConfig) -> RoomsResult<Self> {
         let t = Instant::now();
         let source = scene.to_mesh();
-        // Walkable: facing up within 45 degrees and lying on the floor.
+        // Walkable: flat within 45 degrees and lying on the floor, whichever way it is wound
+        // (some exporters wind every face the other way; a floor slab's underside merges into
+        // the span of its top, and a piece of furniture's into its own top, never walkable).
         let area_types = source
             .triangles
             .iter()
             .map(|t| {
                 let [a, b, c] = t.map(|i| source.vertices[i as usize]);
                 let n = (b - a).cross(&(c - a));
-                let up = n.z > 0.0 && n.z >= n.norm() * std::f32::consts::FRAC_1_SQRT_2;
+                let up = n.z.abs() >= n.norm() * std::f32::consts::FRAC_1_SQRT_2;
                 let low = a.z.max(b.z).max(c.z) <= config.climb;
                 if up && low {
                     AreaType::DEFAULT_WALKABLE

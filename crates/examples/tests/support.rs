@@ -65,6 +65,34 @@ fn a_start_off_the_mesh_has_no_path_rather_than_an_error() {
     assert!(outside.is_none());
 }
 
+/// A scene wound the other way (as some exporters write it: every triangle's vertices in the
+/// opposite order) gives the navigation mesh the same floor and the same path round the wall:
+/// once only upward-facing triangles were walkable, and it reached nothing.
+#[test]
+fn the_navigation_mesh_does_not_care_how_the_scene_is_wound() {
+    let gait = walk(&WalkConfig::default(), 0).unwrap();
+    let config = NavmeshConfig::for_gait(&gait);
+    let mut flipped = walled().to_mesh();
+    for t in &mut flipped.triangles {
+        t.swap(1, 2);
+    }
+    let flipped = Scene::from_mesh("flipped", &flipped).unwrap();
+    let (a, b) = (
+        Navmesh::build(&walled(), &config).unwrap(),
+        Navmesh::build(&flipped, &config).unwrap(),
+    );
+    assert!(b.polygons > 0, "no walkable floor when wound the other way");
+    let (start, goal) = ([1.0, 1.0, 0.93], [5.0, 1.0, 0.93]);
+    let length = |m: &Navmesh| {
+        let path = m.floor_path(start, goal).unwrap().expect("a path");
+        path.windows(2)
+            .map(|w| (w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]))
+            .sum::<f32>()
+    };
+    let (la, lb) = (length(&a), length(&b));
+    assert!((la - lb).abs() < 0.05, "{la} m against {lb} m");
+}
+
 #[derive(Parser)]
 struct Args {
     #[command(flatten)]

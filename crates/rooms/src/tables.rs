@@ -149,7 +149,13 @@ impl Tally {
         for &planner in planners {
             let name = planner.name();
             let sum = PlannerSummary::of(&self.of(planner));
-            let reach = sum.reach_pct.unwrap_or(0.0);
+            // A planner left out of every room (the navigation mesh of a scene Recast could
+            // not build) ran no pair: no figure, rather than a 0% it never earned.
+            let Some(reach) = sum.reach_pct else {
+                line[format!("{name}_reach_pct")] = Value::Null;
+                let _ = writeln!(text, "{name:<12} left out: it ran on no pair");
+                continue;
+            };
             line[format!("{name}_reach_pct")] = reach.into();
             if planner.field().is_some() {
                 line[format!("{name}_no_route_pct")] = sum.no_route_pct.unwrap_or(0.0).into();
