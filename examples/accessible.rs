@@ -288,6 +288,20 @@ fn main() -> Result<()> {
     if args.samples == 0 || args.samples > 1_000_000 {
         bail!("--samples must be in 1..=1000000 (got {})", args.samples);
     }
+    // Flags that would be ignored are refused, not dropped in silence.
+    if args.rooms.is_some() && args.scene.scene.is_some() {
+        bail!("--rooms evaluates generated rooms and would never read --scene: give one of them");
+    }
+    if args.rooms.is_some() && args.motion.any() {
+        bail!("--gltf, --bvh and --html write one scene: not with --rooms");
+    }
+    if !args.no_field && !(1..=10_000_000).contains(&args.field_steps) {
+        bail!(
+            "--field-steps must be in 1..=10000000 (got {}): an untrained field is no field \
+             (--no-field leaves it out)",
+            args.field_steps
+        );
+    }
     let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("models/vae_gated.safetensors");
     let file = args.vae.clone().unwrap_or(shipped);
     let vae = Cvae::load(&file).with_context(|| {

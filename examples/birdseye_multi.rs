@@ -88,6 +88,9 @@ fn main() -> Result<()> {
     if args.rooms.is_some_and(|r| r > 100_000) {
         bail!("--rooms: at most 100000");
     }
+    if args.rooms.is_some() && args.scene.scene.is_some() {
+        bail!("--rooms evaluates generated rooms and would never read --room/--scene: give one of them");
+    }
     if args.rooms.is_some() && args.motion.any() {
         bail!("--gltf, --bvh and --html write one room's people: not with --rooms");
     }

@@ -179,6 +179,13 @@ fn check(args: &Args) -> Result<()> {
             args.field_steps
         );
     }
+    if args.save_field.is_some() && args.rooms != 1 {
+        bail!(
+            "--save-field keeps one room's field: not with --rooms {} (--fields DIR keeps every \
+             room's)",
+            args.rooms
+        );
+    }
     if args.big_budget > 1_000_000 {
         bail!(
             "--big-budget is at most 1000000 RRT* iterations (got {}): the table's runs take \

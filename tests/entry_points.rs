@@ -851,3 +851,45 @@ fn nothing_a_user_saved_is_lost_and_far_scenes_are_refused() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Issue 56, flags that would be ignored are refused: `accessible --scene S --rooms N` (it
+/// evaluated generated rooms and never read S), `birdseye_multi --room S --rooms N` the same,
+/// `accessible --field-steps 0` (figures of an untrained field), `room_nav --save-field` with
+/// several rooms (it saved nothing).
+#[test]
+fn flags_that_would_be_ignored_are_refused() {
+    let dir = scratch("ignored");
+    let scene = dir.join("s.obj");
+    std::fs::write(&scene, "v 0 0 0\nv 4 0 0\nv 4 3 0\nf 1 2 3\n").unwrap();
+    let (s, out) = (
+        scene.to_string_lossy().into_owned(),
+        dir.join("o").to_string_lossy().into_owned(),
+    );
+    if let Some(acc) = example("accessible") {
+        refuses(
+            run(&acc, &["--scene", &s, "--rooms", "1", "--out", &out]),
+            "--scene",
+        );
+        refuses(
+            run(&acc, &["--field-steps", "0", "--out", &out]),
+            "--field-steps",
+        );
+    }
+    if let Some(crowd) = example("birdseye_multi") {
+        refuses(
+            run(&crowd, &["--room", &s, "--rooms", "2", "--out", &out]),
+            "--rooms",
+        );
+    }
+    if let Some(nav) = example("room_nav") {
+        let field = dir.join("f.safetensors").to_string_lossy().into_owned();
+        refuses(
+            run(
+                &nav,
+                &["--save-field", &field, "--rooms", "2", "--out", &out],
+            ),
+            "--save-field",
+        );
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
