@@ -139,4 +139,9 @@ run 56-5 60 $BIN/train_vin --eval-mazes $huge --out $T/v5.safetensors
 printf 'v 0 0 0\nv 800 0 0\nv 800 600 0\nv 0 600 0\nf 1 2 3\nf 1 3 4\n' > $T/wide.obj
 run 56-6 60 $BIN/level --scene $T/wide.obj --up z --out $T/l6
 run 56-7 60 $BIN/room_nav --big-budget 1000000000 --out $T/n7
+# Flags that would be ignored.
+run 56-8a 60 $BIN/accessible --scene $T/unit.obj --rooms 1 --out $T/a8
+run 56-8b 60 $BIN/accessible --field-steps 0 --out $T/a8
+run 56-8c 60 $BIN/birdseye_multi --room $T/unit.obj --rooms 2 --out $T/b8
+run 56-8d 60 $BIN/room_nav --save-field $T/f8.safetensors --rooms 2 --out $T/n8
 fi
