@@ -26,13 +26,6 @@ fn to_bvh(v: Vector3<f32>) -> Vector3<f32> {
     Vector3::new(v.x, v.z, -v.y)
 }
 
-fn children(joint: Joint) -> Vec<Joint> {
-    Joint::ALL
-        .into_iter()
-        .filter(|c| c.parent() == Some(joint))
-        .collect()
-}
-
 /// The turn taking the vectors `from` to `to` best (Kabsch), the smallest one for one pair.
 fn fit(from: &[Vector3<f32>], to: &[Vector3<f32>]) -> Rotation3<f32> {
     if from.len() == 1 {
@@ -58,19 +51,12 @@ fn fit(from: &[Vector3<f32>], to: &[Vector3<f32>]) -> Rotation3<f32> {
 /// The BVH text of `poses`.
 ///
 /// # Errors
-/// [`AffordanceError::InvalidInput`] for a sequence without frames, with a non-finite joint,
-/// or with a bone of no length.
+/// [`AffordanceError::InvalidInput`] for a sequence that is not one [`PoseSequence::new`] would
+/// make (no frames, a frame rate that is not positive, a support per frame missing, a
+/// non-finite joint), or with a bone of no length.
 pub fn bvh_text(poses: &PoseSequence) -> Result<String> {
+    poses.validate().map_err(|e| e.within("BVH"))?;
     let frames = &poses.frames;
-    if frames.is_empty() || !(poses.fps.is_finite() && poses.fps > 0.0) {
-        return Err(AffordanceError::InvalidInput(
-            "BVH: a sequence needs frames and a positive frame rate".into(),
-        ));
-    }
-    for (k, f) in frames.iter().enumerate() {
-        f.validate()
-            .map_err(|e| AffordanceError::InvalidInput(format!("BVH: frame {k}: {e}")))?;
-    }
     let bone = |k: usize, j: Joint, p: Joint| to_bvh(frames[k].joint(j) - frames[k].joint(p));
     // The rest pose: the standing body's directions, the sequence's mean lengths.
     let rest = standing_pose();
@@ -115,7 +101,7 @@ pub fn bvh_text(poses: &PoseSequence) -> Result<String> {
             let parent_turn = joint
                 .parent()
                 .map_or(Rotation3::identity(), |p| global[p.index()]);
-            let kids = children(joint);
+            let kids: Vec<Joint> = joint.children().collect();
             let turn = if kids.is_empty() {
                 parent_turn
             } else {
@@ -168,7 +154,7 @@ fn write_joint(
     } else {
         let _ = writeln!(text, "{pad}  CHANNELS 3 Zrotation Yrotation Xrotation");
     }
-    let kids = children(joint);
+    let kids: Vec<Joint> = joint.children().collect();
     if kids.is_empty() {
         let _ = writeln!(
             text,
@@ -186,7 +172,7 @@ fn write_joint(
 pub fn bvh_order() -> Vec<Joint> {
     fn visit(j: Joint, out: &mut Vec<Joint>) {
         out.push(j);
-        for c in children(j) {
+        for c in j.children() {
             visit(c, out);
         }
     }

@@ -27,5 +27,15 @@ pub enum AffordanceError {
     Scene(#[from] envfield_scene::SceneError),
 }
 
+impl AffordanceError {
+    /// The error with `what` before an invalid input's message (`"walker: frame 4: ..."`).
+    pub(crate) fn within(self, what: &str) -> Self {
+        match self {
+            Self::InvalidInput(m) => Self::InvalidInput(format!("{what}: {m}")),
+            e => e,
+        }
+    }
+}
+
 /// `Result` with [`AffordanceError`].
 pub type Result<T> = std::result::Result<T, AffordanceError>;

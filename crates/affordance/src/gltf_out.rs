@@ -174,8 +174,10 @@ fn turn_to(d: Vector3<f32>) -> UnitQuaternion<f32> {
 /// drawn as points; none for an empty slice) and `actors`, each with one animation.
 ///
 /// # Errors
-/// [`AffordanceError::InvalidInput`] for an actor without frames or with a non-finite joint, a
-/// point that is not finite, or a scene mesh that does not validate.
+/// [`AffordanceError::InvalidInput`] for an actor whose sequence is not one
+/// [`PoseSequence::new`] would make (no frames, a frame rate that is not positive, a support
+/// per frame missing, a non-finite joint; named), a point that is not finite, or a scene mesh
+/// that does not validate.
 pub fn glb_bytes(
     scene: Option<&TriangleMesh>,
     points: &[Point3<f32>],
@@ -225,17 +227,7 @@ pub fn glb_bytes(
     let mut animations = Vec::new();
     for (p, actor) in actors.iter().enumerate() {
         let seq = actor.poses;
-        if seq.frames.is_empty() || !(seq.fps.is_finite() && seq.fps > 0.0) {
-            return Err(AffordanceError::InvalidInput(format!(
-                "{}: no frames, or a frame rate that is not positive",
-                actor.name
-            )));
-        }
-        for (k, f) in seq.frames.iter().enumerate() {
-            f.validate().map_err(|e| {
-                AffordanceError::InvalidInput(format!("{}: frame {k}: {e}", actor.name))
-            })?;
-        }
+        seq.validate().map_err(|e| e.within(actor.name))?;
         let colour = COLOURS[p % COLOURS.len()];
         materials.push(json!({
             "name": actor.name,
@@ -277,10 +269,7 @@ pub fn glb_bytes(
                     (here - from).iter().copied().collect::<Vec<_>>()
                 })
                 .collect();
-            let children: Vec<Joint> = Joint::ALL
-                .into_iter()
-                .filter(|c| c.parent() == Some(joint))
-                .collect();
+            let children: Vec<Joint> = joint.children().collect();
             let mut kids: Vec<usize> = children.iter().map(|c| base + c.index()).collect();
             for &child in &children {
                 kids.push(base + JOINT_COUNT + bone_nodes.len());

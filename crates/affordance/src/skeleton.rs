@@ -105,6 +105,13 @@ impl Joint {
         Joint::ALL.into_iter().find(|j| j.name() == name)
     }
 
+    /// Its children in SMPL's kinematic tree, in SMPL order (none for a hand, foot or head).
+    pub fn children(self) -> impl Iterator<Item = Joint> {
+        Joint::ALL
+            .into_iter()
+            .filter(move |c| c.parent() == Some(self))
+    }
+
     /// Its parent in SMPL's kinematic tree (`None` for the pelvis, the root).
     pub fn parent(self) -> Option<Joint> {
         use Joint::*;
@@ -296,7 +303,9 @@ impl PoseSequence {
         Ok(s)
     }
 
-    fn validate(&self) -> Result<()> {
+    /// The checks of [`PoseSequence::new`], for a sequence whose public fields may have been
+    /// edited since.
+    pub(crate) fn validate(&self) -> Result<()> {
         if !(self.fps.is_finite() && self.fps > 0.0) {
             return Err(AffordanceError::InvalidInput(format!(
                 "frame rate must be positive, got {}",
