@@ -4,9 +4,9 @@
 //! it in a browser, [`crate::viewer_page`]).
 
 use crate::viewer::{viewer_page, ThreeJs};
-use anyhow::{bail, Context, Result};
+use anyhow::{anyhow, bail, Context, Result};
 use envfield_affordance::{glb_bytes, write_bvh, Actor};
-use envfield_grid::{check_writable, write_atomic};
+use envfield_grid::{check_writable, protect_input, write_atomic};
 use envfield_scene::nalgebra::Point3;
 use envfield_scene::TriangleMesh;
 use std::path::{Path, PathBuf};
@@ -33,17 +33,18 @@ impl MotionArgs {
         self.gltf.is_some() || self.bvh.is_some() || self.html.is_some()
     }
 
-    /// Refuses, before any work, outputs that cannot be written, and an output that names one
-    /// of `inputs` (the user's scene, say): nothing a user saved is overwritten. An `--html`
+    /// Protects `inputs` (the user's scene, say) from every write of the run
+    /// ([`protect_input`]), then refuses, before any work, outputs that cannot be written or
+    /// that name one of them: nothing a user saved is overwritten. An `--html`
     /// page needs three.js, looked for now.
     ///
     /// # Errors
     /// The flag and the path that cannot be written, or that is an input.
     pub fn check(&self, inputs: &[&Path]) -> Result<()> {
-        let same = |a: &Path, b: &Path| match (a.canonicalize(), b.canonicalize()) {
-            (Ok(x), Ok(y)) => x == y,
-            _ => false,
-        };
+        // Every write of the run refuses an input from here on (by file identity).
+        for input in inputs {
+            protect_input(input);
+        }
         for (flag, path, ext) in [
             ("--gltf", &self.gltf, "glb"),
             ("--html", &self.html, "html"),
@@ -52,14 +53,7 @@ impl MotionArgs {
             if path.extension().and_then(|e| e.to_str()) != Some(ext) {
                 bail!("{flag} {}: the file must end in .{ext}", path.display());
             }
-            if let Some(input) = inputs.iter().find(|i| same(path, i)) {
-                bail!(
-                    "{flag} {} is an input of this run ({}): not overwritten",
-                    path.display(),
-                    input.display()
-                );
-            }
-            check_writable(path).with_context(|| format!("{flag} {}", path.display()))?;
+            check_writable(path).map_err(|e| anyhow!("{flag} {}: {e}", path.display()))?;
         }
         if let Some(dir) = &self.bvh {
             std::fs::create_dir_all(dir)

@@ -138,7 +138,7 @@ fn check_not_input(path: &Path) -> Result<()> {
         .unwrap_or_else(std::sync::PoisonError::into_inner);
     match inputs.iter().find(|(i, _)| *i == id) {
         Some((_, input)) => Err(GridError::Invalid(format!(
-            "{} is {}, an input of this run: not written over (choose another file or folder)",
+            "{} is an input of this run ({}): not written over (choose another file or folder)",
             path.display(),
             if input == path {
                 "the file read".to_string()
