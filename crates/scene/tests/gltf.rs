@@ -288,28 +288,10 @@ fn base64_triangle(indices: [u16; 3]) -> String {
         bytes.extend(i.to_le_bytes());
     }
     bytes.extend([0, 0]);
-    format!("data:application/octet-stream;base64,{}", base64(&bytes))
-}
-
-fn base64(bytes: &[u8]) -> String {
-    const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::new();
-    for chunk in bytes.chunks(3) {
-        let b = [
-            chunk[0],
-            *chunk.get(1).unwrap_or(&0),
-            *chunk.get(2).unwrap_or(&0),
-        ];
-        let n = (u32::from(b[0]) << 16) | (u32::from(b[1]) << 8) | u32::from(b[2]);
-        for k in 0..4 {
-            if k <= chunk.len() {
-                out.push(A[(n >> (18 - 6 * k) & 63) as usize] as char);
-            } else {
-                out.push('=');
-            }
-        }
-    }
-    out
+    format!(
+        "data:application/octet-stream;base64,{}",
+        base64::encode(&bytes)
+    )
 }
 
 /// OBJ objects and groups come back as named parts over their faces; faces before the first
