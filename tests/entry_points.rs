@@ -706,6 +706,17 @@ fn apartments_refuses_bad_counts_folders_and_weights() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// Runs a trainer that must succeed; the model it wrote to `out`.
+fn trained(bin: &Path, args: &[&str], out: &str) -> Vec<u8> {
+    let done = run(bin, args);
+    assert!(
+        done.status.success(),
+        "{}",
+        String::from_utf8_lossy(&done.stderr)
+    );
+    std::fs::read(out).unwrap()
+}
+
 /// Issue 56, what a user saved is never lost: a resume that would train nothing refuses and
 /// keeps the model (train_vin, train_maze); `--walks-out` is written only at the end and never
 /// onto the scene; an `--out` folder holding the scene as `scene.obj` is refused before any
@@ -718,16 +729,11 @@ fn nothing_a_user_saved_is_lost_and_far_scenes_are_refused() {
     if let Some(vin) = example("train_vin") {
         let out = d("v.safetensors");
         let base = ["--size", "8", "--mazes", "8", "--eval-mazes", "4"];
-        let first = run(
+        let before = trained(
             &vin,
             &[&base[..], &["--max-steps", "3", "--out", &out]].concat(),
+            &out,
         );
-        assert!(
-            first.status.success(),
-            "{}",
-            String::from_utf8_lossy(&first.stderr)
-        );
-        let before = std::fs::read(&out).unwrap();
         let ckpt = format!("{out}.ckpt");
         for steps in ["3", "2"] {
             let args = [
@@ -748,16 +754,11 @@ fn nothing_a_user_saved_is_lost_and_far_scenes_are_refused() {
     if let Some(train) = example("train_maze") {
         let out = d("m.safetensors");
         let base = ["--arch", "plain", "--size", "8"];
-        let first = run(
+        let before = trained(
             &train,
             &[&base[..], &["--steps", "3", "--out", &out]].concat(),
+            &out,
         );
-        assert!(
-            first.status.success(),
-            "{}",
-            String::from_utf8_lossy(&first.stderr)
-        );
-        let before = std::fs::read(&out).unwrap();
         let ckpt = format!("{out}.ckpt");
         let args = [
             &base[..],
