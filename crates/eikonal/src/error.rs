@@ -54,6 +54,14 @@ pub enum EikonalError {
         /// The most padded cells a solve can index.
         limit: usize,
     },
+    /// A level-set march's input is out of range (see [`crate::level_set`]); the text names
+    /// what and where.
+    #[error("{0}")]
+    LevelSet(String),
+    /// A level set without a zero contour: `phi` never changes sign and is nowhere 0 (outside
+    /// the mask), so no front can start.
+    #[error("the array phi contains no zero contour (no zero level set)")]
+    NoZeroContour,
     /// A solver setting is out of range.
     #[error("invalid solver setting: {0}")]
     InvalidConfig(String),

@@ -10,6 +10,9 @@
 //!   scikit-fmm, its issue #47).
 //! - [`dijkstra2`], [`dijkstra3`], [`bfs2`], [`bfs3`]: exact shortest paths on the move graph
 //!   of a [`Neighbourhood2`](envfield_grid::Neighbourhood2) / `Neighbourhood3`.
+//! - [`level_set`]: marching from the zero contour of a level-set function on grids of 1 to
+//!   12 axes (signed distance, travel time, extension velocities; narrow band, periodic axes,
+//!   masks), with scikit-fmm's semantics; [`level_set::descend`] walks back down a field.
 //! - Many goals at once: [`FastMarching::solve2_many`], [`FastMarching::solve2_batch`],
 //!   [`GraphDistance::solve_many`] (rayon).
 //! - [`FastMarching`] and [`GraphDistance`] implement [`FieldModel`](envfield_grid::FieldModel).
@@ -34,6 +37,7 @@ mod fmm;
 mod free;
 mod graph;
 mod heap;
+pub mod level_set;
 mod march;
 mod sources;
 
