@@ -3,12 +3,17 @@
 //! the source at the centre. The exact graph distance (Dijkstra, 8-connected) runs in the same
 //! groups as a baseline.
 //!
+//! The level-set marcher (scikit-fmm's problem, `envfield.fmm` from Python) runs on the same
+//! grids in `level_set_2d`/`level_set_3d`, the obstacles as its mask and the front starting
+//! around the centre cell, beside the point-source marcher.
+//!
 //! `cargo bench --bench fmm`
 
 // criterion's macros generate undocumented public functions.
 #![allow(missing_docs)]
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
+use envfield::eikonal::level_set::{LevelSet, LevelSetOptions};
 use envfield::eikonal::{dijkstra2, FastMarching, Order};
 use envfield::grid::synth::{scatter_cubes3, scatter_squares2};
 use envfield::grid::{Cell2, Cell3, MoveRule, Neighbourhood2};
@@ -59,5 +64,48 @@ fn bench_3d(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, bench_2d, bench_3d);
+/// The level set of a point source at `centre` (-1 there, 1 elsewhere) on `shape`.
+fn point_level_set(shape: &[usize], centre: usize) -> Vec<f64> {
+    let mut phi = vec![1.0; shape.iter().product()];
+    phi[centre] = -1.0;
+    phi
+}
+
+fn bench_level_set(c: &mut Criterion) {
+    let mut group = c.benchmark_group("level_set");
+    group
+        .sample_size(10)
+        .measurement_time(Duration::from_secs(8));
+    let n = 1024;
+    let src = Cell2::new(n / 2, n / 2);
+    let grid = scatter_squares2(n, n, 0.2, n / 128, 0, &[src]).expect("grid");
+    let phi2 = point_level_set(&[n, n], grid.index(src).expect("inside"));
+    let m = 128;
+    let src3 = Cell3::new(m / 2, m / 2, m / 2);
+    let grid3 = scatter_cubes3([m, m, m], 0.2, 1, 0, &[src3]).expect("grid");
+    let phi3 = point_level_set(&[m, m, m], grid3.index(src3).expect("inside"));
+    let (shape2, shape3) = ([n, n], [m, m, m]);
+    for order in [Order::First, Order::Second] {
+        let options = LevelSetOptions {
+            order,
+            ..LevelSetOptions::default()
+        };
+        let set = LevelSet::new(&shape2, &phi2).with_mask(grid.obstacles());
+        let id = BenchmarkId::new(format!("distance_order{}", order.as_number()), n);
+        group.bench_function(id, |b| {
+            b.iter(|| black_box(set).distance(&options).expect("march"))
+        });
+        let set = LevelSet::new(&shape3, &phi3).with_mask(grid3.obstacles());
+        let id = BenchmarkId::new(
+            format!("distance_order{}", order.as_number()),
+            format!("{m}^3"),
+        );
+        group.bench_function(id, |b| {
+            b.iter(|| black_box(set).distance(&options).expect("march"))
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, bench_2d, bench_3d, bench_level_set);
 criterion_main!(benches);

@@ -14,8 +14,7 @@ use pyo3::prelude::*;
 
 fn to_py(e: EikonalError) -> PyErr {
     let text = e.to_string();
-    if text.contains("divides by zero") || text.contains("internal") || text.contains("self-test")
-    {
+    if text.contains("divides by zero") || text.contains("internal") || text.contains("self-test") {
         PyRuntimeError::new_err(text)
     } else {
         PyValueError::new_err(text)
@@ -64,17 +63,24 @@ fn march<'py>(
     let phi_s = slice(&phi, "phi")?;
     let mask_s = mask.as_ref().map(|m| slice(m, "mask")).transpose()?;
     let speed_s = speed.as_ref().map(|s| slice(s, "speed")).transpose()?;
-    let ext_s = ext_mask.as_ref().map(|m| slice(m, "ext_mask")).transpose()?;
+    let ext_s = ext_mask
+        .as_ref()
+        .map(|m| slice(m, "ext_mask"))
+        .transpose()?;
     let mut set = LevelSet::new(&shape, phi_s);
     if let Some(m) = mask_s {
         set = set.with_mask(m);
     }
-    let need_speed = || speed_s.ok_or_else(|| PyValueError::new_err(format!("{kind} needs a speed")));
+    let need_speed =
+        || speed_s.ok_or_else(|| PyValueError::new_err(format!("{kind} needs a speed")));
     let (marched, velocity) = match kind {
         "distance" => (py.detach(|| set.distance(&options)).map_err(to_py)?, None),
         "travel_time" => {
             let s = need_speed()?;
-            (py.detach(|| set.travel_time(s, &options)).map_err(to_py)?, None)
+            (
+                py.detach(|| set.travel_time(s, &options)).map_err(to_py)?,
+                None,
+            )
         }
         "extension_velocities" => {
             let s = need_speed()?;
@@ -83,7 +89,11 @@ fn march<'py>(
                 .map_err(to_py)?;
             (e.distance, Some(e.velocity))
         }
-        other => return Err(PyValueError::new_err(format!("unknown march kind {other:?}"))),
+        other => {
+            return Err(PyValueError::new_err(format!(
+                "unknown march kind {other:?}"
+            )))
+        }
     };
     let values = marched.values.into_pyarray(py).reshape(shape.clone())?;
     let reached = marched.reached.into_pyarray(py).reshape(shape.clone())?;
@@ -116,7 +126,7 @@ fn descend<'py>(
         .map_err(to_py)?;
     let rows = path.len();
     let flat: Vec<f64> = path.into_iter().flatten().collect();
-    Ok(flat.into_pyarray(py).reshape(vec![rows, shape.len()])?)
+    flat.into_pyarray(py).reshape(vec![rows, shape.len()])
 }
 
 /// envfield's native module: fast marching and the rooms' planners, called by the pure-Python

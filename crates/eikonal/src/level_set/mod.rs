@@ -33,7 +33,8 @@
 //! let phi = [-1.0, -1.0, -1.0, -1.0, 1.0, 1.0, 1.0, 1.0];
 //! let options = LevelSetOptions { dx: vec![0.5], ..LevelSetOptions::default() };
 //! let d = LevelSet::new(&[8], &phi).distance(&options)?;
-//! assert_eq!(d.values, [-1.75, -1.25, -0.75, -0.25, 0.25, 0.75, 1.25, 1.75]);
+//! let want = [-1.75, -1.25, -0.75, -0.25, 0.25, 0.75, 1.25, 1.75];
+//! assert!(d.values.iter().zip(want).all(|(v, w)| (v - w).abs() < 1e-12));
 //! assert!(d.reached.iter().all(|&r| r));
 //! # Ok::<(), envfield_eikonal::EikonalError>(())
 //! ```
@@ -53,6 +54,12 @@ const FAR: u8 = 0;
 const NARROW: u8 = 1;
 const FROZEN: u8 = 2;
 const MASK: u8 = 3;
+/// The state's bits of a cell's flags; the others keep `phi`'s sign, so that the march reads
+/// it beside the state rather than from `phi`.
+const STATE: u8 = 3;
+const ABOVE_EPS: u8 = 4;
+const POSITIVE: u8 = 8;
+const NEGATIVE: u8 = 16;
 
 /// How a level set is marched; the defaults are scikit-fmm's.
 #[derive(Clone, Debug, PartialEq)]
@@ -139,9 +146,7 @@ impl<'a> LevelSet<'a> {
     /// than [`MAX_DIMENSIONS`] axes, a spacing that is not positive and finite, a `phi` that is
     /// not finite, a negative narrow band, or no zero contour at all.
     pub fn distance(&self, options: &LevelSetOptions) -> Result<Marched> {
-        let mut m = Marcher::new(self, options, Kind::Distance)?;
-        m.march()?;
-        Ok(m.finish())
+        Ok(run(self, options, Kind::Distance, None, None)?.0)
     }
 
     /// The time the front leaving the zero contour takes to reach every cell at `speed` (one
@@ -150,15 +155,8 @@ impl<'a> LevelSet<'a> {
     /// # Errors
     /// As [`LevelSet::distance`], and for a `speed` of another length or a NaN speed.
     pub fn travel_time(&self, speed: &[f64], options: &LevelSetOptions) -> Result<Marched> {
-        check_values(self.phi.len(), speed, "speed", false)?;
-        let mut m = Marcher::new(self, options, Kind::Travel { speed })?;
-        for (flag, &s) in m.flags.iter_mut().zip(speed) {
-            if s < f64::EPSILON {
-                *flag = MASK;
-            }
-        }
-        m.march()?;
-        Ok(m.finish())
+        check_values(self.phi.len(), speed, "speed", true)?;
+        Ok(run(self, options, Kind::Travel, Some(speed), None)?.0)
     }
 
     /// The signed distance, and `speed` extended from the zero contour along its normals
@@ -178,28 +176,10 @@ impl<'a> LevelSet<'a> {
         if let Some(e) = ext_mask {
             check_len(self.phi.len(), e.len(), "ext_mask")?;
         }
-        let kind = Kind::Extension {
-            speed,
-            ext_mask,
-            velocity: vec![0.0; self.phi.len()],
-        };
-        let mut m = Marcher::new(self, options, kind)?;
-        m.march()?;
-        let velocity = match &mut m.kind {
-            Kind::Extension { velocity, .. } => {
-                let mut v = std::mem::take(velocity);
-                for (v, &f) in v.iter_mut().zip(&m.flags) {
-                    if f != FROZEN {
-                        *v = f64::MAX;
-                    }
-                }
-                v
-            }
-            _ => unreachable!("the marcher was made for extension"),
-        };
+        let (distance, velocity) = run(self, options, Kind::Extension, Some(speed), ext_mask)?;
         Ok(Extended {
-            distance: m.finish(),
-            velocity,
+            distance,
+            velocity: velocity.expect("the extension marcher extends"),
         })
     }
 }
@@ -234,18 +214,16 @@ fn check_values(cells: usize, values: &[f64], what: &str, infinite_ok: bool) -> 
     Ok(())
 }
 
-/// The grid's geometry: shape, strides, spacing and which axes wrap.
-struct Geometry {
+/// Spacing and wrapping, checked.
+struct Spacing {
     nd: usize,
-    shape: [usize; MAX_DIMENSIONS],
-    stride: [usize; MAX_DIMENSIONS],
     dx: [f64; MAX_DIMENSIONS],
     /// `1 / dx^2` per axis.
     idx2: [f64; MAX_DIMENSIONS],
     periodic: [bool; MAX_DIMENSIONS],
 }
 
-impl Geometry {
+impl Spacing {
     fn new(shape: &[usize], options: &LevelSetOptions) -> Result<Self> {
         let nd = shape.len();
         if nd == 0 || nd > MAX_DIMENSIONS {
@@ -256,23 +234,20 @@ impl Geometry {
         if let Some(a) = shape.iter().position(|&s| s == 0) {
             return Err(invalid(format!("axis {a} of the grid has no cells")));
         }
-        let mut g = Geometry {
+        let mut cells = 1usize;
+        for &n in shape {
+            // Padded by two cells on each side, the grid must still number its cells in 32 bits.
+            cells = cells
+                .checked_mul(n + 4)
+                .filter(|&c| c < u32::MAX as usize)
+                .ok_or_else(|| invalid(format!("the {shape:?} grid has too many cells")))?;
+        }
+        let mut sp = Spacing {
             nd,
-            shape: [1; MAX_DIMENSIONS],
-            stride: [0; MAX_DIMENSIONS],
             dx: [1.0; MAX_DIMENSIONS],
             idx2: [1.0; MAX_DIMENSIONS],
             periodic: [false; MAX_DIMENSIONS],
         };
-        g.shape[..nd].copy_from_slice(shape);
-        let mut s = 1usize;
-        for a in (0..nd).rev() {
-            g.stride[a] = s;
-            s = s
-                .checked_mul(shape[a])
-                .filter(|&n| n < u32::MAX as usize)
-                .ok_or_else(|| invalid(format!("the {shape:?} grid has too many cells")))?;
-        }
         if !options.dx.is_empty() {
             if options.dx.len() != nd {
                 return Err(invalid(format!(
@@ -286,8 +261,8 @@ impl Geometry {
                         "the spacing of axis {a} is {d}; it must be positive and finite"
                     )));
                 }
-                g.dx[a] = d;
-                g.idx2[a] = 1.0 / d / d;
+                sp.dx[a] = d;
+                sp.idx2[a] = 1.0 / d / d;
             }
         }
         if !options.periodic.is_empty() {
@@ -297,157 +272,396 @@ impl Geometry {
                     options.periodic.len()
                 )));
             }
-            g.periodic[..nd].copy_from_slice(&options.periodic);
+            sp.periodic[..nd].copy_from_slice(&options.periodic);
         }
-        Ok(g)
+        Ok(sp)
+    }
+}
+
+/// How a cell finds its neighbours one and two steps along an axis.
+trait Topology {
+    /// The number of axes.
+    fn nd(&self) -> usize;
+    /// The cell `step` (±1 or ±2) cells from `i` along `axis`; `None` off the grid.
+    fn step(&self, i: usize, axis: usize, step: isize) -> Option<usize>;
+    /// Whether `axis` wraps around (its neighbours are taken whatever their flags).
+    fn wraps(&self, axis: usize) -> bool;
+    /// The caller's flat index of cell `i`.
+    fn user_index(&self, i: usize) -> usize;
+}
+
+/// A grid of `ND` axes, none wrapping, stored with two cells of masked padding on every
+/// side: a neighbour is an offset, and the padding's flags stop the march at the border.
+struct Padded<const ND: usize> {
+    /// The padded grid's strides.
+    stride: [usize; ND],
+    shape: [usize; ND],
+}
+
+impl<const ND: usize> Padded<ND> {
+    fn new(shape: &[usize]) -> Self {
+        let mut p = Padded {
+            stride: [0; ND],
+            shape: [0; ND],
+        };
+        p.shape.copy_from_slice(shape);
+        let mut s = 1;
+        for a in (0..ND).rev() {
+            p.stride[a] = s;
+            s *= shape[a] + 4;
+        }
+        p
     }
 
     fn cells(&self) -> usize {
-        self.stride[0] * self.shape[0]
+        self.stride[0] * (self.shape[0] + 4)
     }
 
-    #[inline]
-    fn coords(&self, i: usize) -> [usize; MAX_DIMENSIONS] {
-        let mut c = [0; MAX_DIMENSIONS];
-        let mut rem = i;
-        for a in 0..self.nd - 1 {
-            c[a] = rem / self.stride[a];
-            rem -= c[a] * self.stride[a];
-        }
-        c[self.nd - 1] = rem;
-        c
+    /// `(caller's start, padded start)` of every row along the last axis.
+    fn rows(&self) -> impl Iterator<Item = (usize, usize)> + '_ {
+        let rows: usize = self.shape[..ND - 1].iter().product();
+        let len = self.shape[ND - 1];
+        let mut c = [0usize; ND];
+        (0..rows).map(move |r| {
+            let padded: usize = (0..ND).map(|a| (c[a] + 2) * self.stride[a]).sum();
+            // The next row: an odometer over every axis but the last.
+            for a in (0..ND.saturating_sub(1)).rev() {
+                c[a] += 1;
+                if c[a] < self.shape[a] {
+                    break;
+                }
+                c[a] = 0;
+            }
+            (r * len, padded)
+        })
     }
 
-    /// The cell `step` cells from `i` (at `c`) along `axis`: wrapped on a periodic axis,
-    /// `None` off the grid.
-    #[inline]
-    fn step(
-        &self,
-        i: usize,
-        c: &[usize; MAX_DIMENSIONS],
-        axis: usize,
-        step: isize,
-    ) -> Option<usize> {
-        let n = self.shape[axis] as isize;
-        let to = c[axis] as isize + step;
-        if self.periodic[axis] {
-            let w = to.rem_euclid(n);
-            return Some(i - c[axis] * self.stride[axis] + w as usize * self.stride[axis]);
+    fn pad<T: Copy>(&self, src: &[T], fill: T) -> Vec<T> {
+        let len = self.shape[ND - 1];
+        let mut out = vec![fill; self.cells()];
+        for (s, d) in self.rows() {
+            out[d..d + len].copy_from_slice(&src[s..s + len]);
         }
-        if to < 0 || to >= n {
-            return None;
+        out
+    }
+
+    fn unpad<T: Copy>(&self, src: &[T]) -> Vec<T> {
+        let len = self.shape[ND - 1];
+        let mut out = Vec::with_capacity(self.shape.iter().product());
+        for (_, d) in self.rows() {
+            out.extend_from_slice(&src[d..d + len]);
         }
+        out
+    }
+}
+
+impl<const ND: usize> Topology for Padded<ND> {
+    #[inline(always)]
+    fn nd(&self) -> usize {
+        ND
+    }
+
+    #[inline(always)]
+    fn step(&self, i: usize, axis: usize, step: isize) -> Option<usize> {
         Some((i as isize + step * self.stride[axis] as isize) as usize)
     }
+
+    #[inline(always)]
+    fn wraps(&self, _axis: usize) -> bool {
+        false
+    }
+
+    fn user_index(&self, mut i: usize) -> usize {
+        let mut flat = 0;
+        for a in 0..ND {
+            let c = i / self.stride[a];
+            i -= c * self.stride[a];
+            flat = flat * self.shape[a] + (c - 2);
+        }
+        flat
+    }
 }
 
-enum Kind<'a> {
+/// Any grid, some axes maybe wrapping: a neighbour's coordinate is read off its index.
+struct Wrapped {
+    nd: usize,
+    shape: [usize; MAX_DIMENSIONS],
+    stride: [usize; MAX_DIMENSIONS],
+    periodic: [bool; MAX_DIMENSIONS],
+}
+
+impl Wrapped {
+    fn new(shape: &[usize], sp: &Spacing) -> Self {
+        let mut w = Wrapped {
+            nd: shape.len(),
+            shape: [1; MAX_DIMENSIONS],
+            stride: [0; MAX_DIMENSIONS],
+            periodic: sp.periodic,
+        };
+        w.shape[..shape.len()].copy_from_slice(shape);
+        let mut s = 1;
+        for a in (0..shape.len()).rev() {
+            w.stride[a] = s;
+            s *= shape[a];
+        }
+        w
+    }
+}
+
+impl Topology for Wrapped {
+    fn nd(&self) -> usize {
+        self.nd
+    }
+
+    #[inline]
+    fn step(&self, i: usize, axis: usize, step: isize) -> Option<usize> {
+        let n = self.shape[axis] as isize;
+        let c = (i / self.stride[axis]) as isize % n;
+        let to = c + step;
+        let to = if self.periodic[axis] {
+            to.rem_euclid(n)
+        } else if to < 0 || to >= n {
+            return None;
+        } else {
+            to
+        };
+        Some((i as isize + (to - c) * self.stride[axis] as isize) as usize)
+    }
+
+    fn wraps(&self, axis: usize) -> bool {
+        self.periodic[axis]
+    }
+
+    fn user_index(&self, i: usize) -> usize {
+        i
+    }
+}
+
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Kind {
     Distance,
-    Travel {
-        speed: &'a [f64],
-    },
-    Extension {
-        speed: &'a [f64],
-        ext_mask: Option<&'a [bool]>,
-        velocity: Vec<f64>,
-    },
+    Travel,
+    Extension,
 }
 
-struct Marcher<'a> {
-    g: Geometry,
+/// The values, where the march reached, and (for the extension) the velocities, in the
+/// caller's layout.
+type Outcome = (Marched, Option<Vec<f64>>);
+
+/// Checks the input, lays the grid out (padded where it can be) and marches.
+fn run(
+    set: &LevelSet<'_>,
+    options: &LevelSetOptions,
+    kind: Kind,
+    speed: Option<&[f64]>,
+    ext_mask: Option<&[bool]>,
+) -> Result<Outcome> {
+    let sp = Spacing::new(set.shape, options)?;
+    let n: usize = set.shape.iter().product();
+    check_values(n, set.phi, "phi", false)
+        .map_err(|e| invalid(format!("{e} (the grid is {:?})", set.shape)))?;
+    if options.narrow.is_nan() || options.narrow < 0.0 {
+        return Err(invalid(format!(
+            "the narrow band is {}; it must be 0 (none) or positive",
+            options.narrow
+        )));
+    }
+    let mut flags = vec![FAR; n];
+    if let Some(mask) = set.mask {
+        check_len(n, mask.len(), "mask")?;
+        for (f, &m) in flags.iter_mut().zip(mask) {
+            if m {
+                *f = MASK;
+            }
+        }
+    }
+    if kind == Kind::Travel {
+        let speed = speed.expect("travel time has a speed");
+        for (f, &s) in flags.iter_mut().zip(speed) {
+            if s < f64::EPSILON {
+                *f = MASK;
+            }
+        }
+    }
+    let input = Input {
+        phi: set.phi,
+        speed,
+        ext_mask,
+        flags,
+    };
+    let wraps = sp.periodic[..sp.nd].iter().any(|&p| p);
+    match (wraps, sp.nd) {
+        (false, 1) => padded::<1>(set.shape, sp, options, kind, input),
+        (false, 2) => padded::<2>(set.shape, sp, options, kind, input),
+        (false, 3) => padded::<3>(set.shape, sp, options, kind, input),
+        _ => {
+            let topo = Wrapped::new(set.shape, &sp);
+            let arrays = (input.phi, input.speed, input.ext_mask);
+            let m = Marcher::new(topo, sp, options, kind, input.flags, arrays);
+            m.run(|v| v.to_vec(), |f| f.to_vec())
+        }
+    }
+}
+
+/// The caller's arrays and the flags made from them.
+struct Input<'a> {
     phi: &'a [f64],
+    speed: Option<&'a [f64]>,
+    ext_mask: Option<&'a [bool]>,
+    flags: Vec<u8>,
+}
+
+fn padded<const ND: usize>(
+    shape: &[usize],
+    sp: Spacing,
+    options: &LevelSetOptions,
+    kind: Kind,
+    input: Input<'_>,
+) -> Result<Outcome> {
+    let topo = Padded::<ND>::new(shape);
+    let flags = topo.pad(&input.flags, MASK);
+    let phi = topo.pad(input.phi, 0.0);
+    let speed = input.speed.map(|s| topo.pad(s, 1.0));
+    let ext_mask = input.ext_mask.map(|e| topo.pad(e, false));
+    let layout = Padded::<ND>::new(shape);
+    let arrays = (phi.as_slice(), speed.as_deref(), ext_mask.as_deref());
+    let m = Marcher::new(topo, sp, options, kind, flags, arrays);
+    m.run(|v| layout.unpad(v), |f| layout.unpad(f))
+}
+
+struct Marcher<'a, T: Topology> {
+    topo: T,
+    sp: Spacing,
+    phi: &'a [f64],
+    speed: Option<&'a [f64]>,
+    ext_mask: Option<&'a [bool]>,
     flags: Vec<u8>,
     dist: Vec<f64>,
+    velocity: Vec<f64>,
     order: Order,
     narrow: f64,
     self_test: bool,
-    kind: Kind<'a>,
+    kind: Kind,
 }
 
 /// Second-order weights: `(3/2)^2` and one third.
 const AA: f64 = 9.0 / 4.0;
 const ONE_THIRD: f64 = 1.0 / 3.0;
 
-impl<'a> Marcher<'a> {
-    fn new(set: &LevelSet<'a>, options: &LevelSetOptions, kind: Kind<'a>) -> Result<Self> {
-        let g = Geometry::new(set.shape, options)?;
-        let n = g.cells();
-        check_values(n, set.phi, "phi", false)
-            .map_err(|e| invalid(format!("{e} (the grid is {:?})", set.shape)))?;
-        if !(options.narrow >= 0.0) {
-            return Err(invalid(format!(
-                "the narrow band is {}; it must be 0 (none) or positive",
-                options.narrow
-            )));
-        }
-        let mut flags = vec![FAR; n];
-        if let Some(mask) = set.mask {
-            check_len(n, mask.len(), "mask")?;
-            for (f, &m) in flags.iter_mut().zip(mask) {
-                if m {
-                    *f = MASK;
-                }
+impl<'a, T: Topology> Marcher<'a, T> {
+    fn new(
+        topo: T,
+        sp: Spacing,
+        options: &LevelSetOptions,
+        kind: Kind,
+        mut flags: Vec<u8>,
+        (phi, speed, ext_mask): (&'a [f64], Option<&'a [f64]>, Option<&'a [bool]>),
+    ) -> Self {
+        let n = flags.len();
+        for (f, &p) in flags.iter_mut().zip(phi) {
+            if p > f64::EPSILON {
+                *f |= ABOVE_EPS;
+            }
+            if p > 0.0 {
+                *f |= POSITIVE;
+            } else if p < 0.0 {
+                *f |= NEGATIVE;
             }
         }
-        Ok(Self {
-            g,
-            phi: set.phi,
-            flags,
+        Self {
+            topo,
+            sp,
+            phi,
+            speed,
+            ext_mask,
             dist: vec![0.0; n],
+            velocity: if kind == Kind::Extension {
+                vec![0.0; n]
+            } else {
+                Vec::new()
+            },
+            flags,
             order: options.order,
             narrow: options.narrow,
             self_test: options.self_test,
             kind,
-        })
+        }
     }
 
-    fn finish(self) -> Marched {
-        let reached: Vec<bool> = self.flags.iter().map(|&f| f == FROZEN).collect();
-        let mut values = self.dist;
-        for (v, &r) in values.iter_mut().zip(&reached) {
-            if !r {
+    /// Marches, then hands the values back through `values` and `flags` (the layout's
+    /// unpadding).
+    fn run(
+        mut self,
+        values: impl Fn(&[f64]) -> Vec<f64>,
+        flags: impl Fn(&[u8]) -> Vec<u8>,
+    ) -> Result<Outcome> {
+        self.march()?;
+        for (v, &f) in self.dist.iter_mut().zip(&self.flags) {
+            if f & STATE != FROZEN {
                 *v = f64::MAX;
             }
         }
-        Marched { values, reached }
+        let velocity = (self.kind == Kind::Extension).then(|| {
+            for (v, &f) in self.velocity.iter_mut().zip(&self.flags) {
+                if f & STATE != FROZEN {
+                    *v = f64::MAX;
+                }
+            }
+            values(&self.velocity)
+        });
+        let reached = flags(&self.flags)
+            .into_iter()
+            .map(|f| f & STATE == FROZEN)
+            .collect();
+        Ok((
+            Marched {
+                values: values(&self.dist),
+                reached,
+            },
+            velocity,
+        ))
+    }
+
+    #[inline(always)]
+    fn state(&self, i: usize) -> u8 {
+        self.flags[i] & STATE
+    }
+
+    #[inline(always)]
+    fn set_state(&mut self, i: usize, state: u8) {
+        self.flags[i] = self.flags[i] & !STATE | state;
+    }
+
+    /// Whether `phi` has strictly opposite signs at `a` and `b` (`phi[a] * phi[b] < 0`).
+    #[inline(always)]
+    fn opposite(&self, a: usize, b: usize) -> bool {
+        let (fa, fb) = (self.flags[a], self.flags[b]);
+        (fa & POSITIVE != 0 && fb & NEGATIVE != 0) || (fa & NEGATIVE != 0 && fb & POSITIVE != 0)
     }
 
     /// A neighbour `step` cells along `axis`, unless it is off the grid or (on an axis that
     /// does not wrap) flagged `unless`.
-    #[inline]
-    fn neighbour(
-        &self,
-        i: usize,
-        c: &[usize; MAX_DIMENSIONS],
-        axis: usize,
-        step: isize,
-        unless: u8,
-    ) -> Option<usize> {
-        let n = self.g.step(i, c, axis, step)?;
-        if !self.g.periodic[axis] && self.flags[n] == unless {
+    #[inline(always)]
+    fn neighbour(&self, i: usize, axis: usize, step: isize, unless: u8) -> Option<usize> {
+        let n = self.topo.step(i, axis, step)?;
+        if !self.topo.wraps(axis) && self.state(n) == unless {
             return None;
         }
         Some(n)
     }
 
     /// A frozen neighbour `step` cells along `axis`.
-    #[inline]
-    fn frozen(
-        &self,
-        i: usize,
-        c: &[usize; MAX_DIMENSIONS],
-        axis: usize,
-        step: isize,
-    ) -> Option<usize> {
-        self.neighbour(i, c, axis, step, MASK)
-            .filter(|&n| self.flags[n] == FROZEN)
+    #[inline(always)]
+    fn frozen(&self, i: usize, axis: usize, step: isize) -> Option<usize> {
+        self.neighbour(i, axis, step, MASK)
+            .filter(|&n| self.state(n) == FROZEN)
     }
 
     fn march(&mut self) -> Result<()> {
         self.freeze_contour()?;
         let mut heap = Heap::new(self.flags.len(), self.self_test);
         self.first_band(&mut heap)?;
-        if !self.flags.contains(&FROZEN) {
+        if !self.flags.iter().any(|&f| f & STATE == FROZEN) {
             return Err(EikonalError::NoZeroContour);
         }
         let mut batch = Vec::new();
@@ -470,9 +684,10 @@ impl<'a> Marcher<'a> {
         Ok(())
     }
 
+    #[inline]
     fn freeze(&mut self, i: usize) -> Result<()> {
-        self.flags[i] = FROZEN;
-        if matches!(self.kind, Kind::Extension { .. }) {
+        self.set_state(i, FROZEN);
+        if self.kind == Kind::Extension {
             self.extend_to(i)?;
         }
         Ok(())
@@ -481,11 +696,10 @@ impl<'a> Marcher<'a> {
     /// Updates the neighbours of a newly frozen cell (and, at second order, the cells two
     /// steps out beyond a frozen neighbour).
     fn update_around(&mut self, cell: usize, heap: &mut Heap) -> Result<()> {
-        let c = self.g.coords(cell);
-        for axis in 0..self.g.nd {
+        for axis in 0..self.topo.nd() {
             for step in [-1isize, 1] {
-                if let Some(n) = self.neighbour(cell, &c, axis, step, FROZEN) {
-                    match self.flags[n] {
+                if let Some(n) = self.neighbour(cell, axis, step, FROZEN) {
+                    match self.state(n) {
                         NARROW => {
                             let d = self.update(n)?;
                             if d != 0.0 {
@@ -497,16 +711,16 @@ impl<'a> Marcher<'a> {
                             let d = self.update(n)?;
                             if d != 0.0 {
                                 self.dist[n] = d;
-                                self.flags[n] = NARROW;
+                                self.set_state(n, NARROW);
                                 heap.push(n, d.abs())?;
                             }
                         }
                         _ => {}
                     }
                 }
-                if self.order == Order::Second && self.frozen(cell, &c, axis, step).is_some() {
-                    if let Some(n2) = self.neighbour(cell, &c, axis, 2 * step, FROZEN) {
-                        if self.flags[n2] == NARROW {
+                if self.order == Order::Second && self.frozen(cell, axis, step).is_some() {
+                    if let Some(n2) = self.neighbour(cell, axis, 2 * step, FROZEN) {
+                        if self.state(n2) == NARROW {
                             let d = self.update_second(n2)?;
                             if d != 0.0 {
                                 heap.set(n2, d.abs())?;
@@ -523,17 +737,14 @@ impl<'a> Marcher<'a> {
     /// The far cells beside the frozen contour, queued with their first values.
     fn first_band(&mut self, heap: &mut Heap) -> Result<()> {
         for i in 0..self.flags.len() {
-            if self.flags[i] != FAR {
+            if self.state(i) != FAR {
                 continue;
             }
-            let c = self.g.coords(i);
-            let touches = (0..self.g.nd).any(|axis| {
-                [-1, 1]
-                    .iter()
-                    .any(|&s| self.frozen(i, &c, axis, s).is_some())
+            let touches = (0..self.topo.nd()).any(|axis| {
+                self.frozen(i, axis, -1).is_some() || self.frozen(i, axis, 1).is_some()
             });
             if touches {
-                self.flags[i] = NARROW;
+                self.set_state(i, NARROW);
                 let d = self.update(i)?;
                 self.dist[i] = d;
                 heap.push(i, d.abs())?;
@@ -542,6 +753,7 @@ impl<'a> Marcher<'a> {
         Ok(())
     }
 
+    #[inline]
     fn update(&self, i: usize) -> Result<f64> {
         match self.order {
             Order::First => Ok(self.update_first(i)),
@@ -551,11 +763,11 @@ impl<'a> Marcher<'a> {
 
     /// The right root of `a t^2 + b t + c = rhs` for cell `i`: the distance takes the root on
     /// `phi`'s side, the travel time the larger; `None` without a real root.
-    #[inline]
+    #[inline(always)]
     fn quadratic(&self, i: usize, a: f64, b: f64, c: f64) -> Option<f64> {
-        let (c, larger) = match &self.kind {
-            Kind::Travel { speed } => (c - 1.0 / (speed[i] * speed[i]), true),
-            _ => (c - 1.0, self.phi[i] > f64::EPSILON),
+        let (c, larger) = match self.speed {
+            Some(speed) if self.kind == Kind::Travel => (c - 1.0 / (speed[i] * speed[i]), true),
+            _ => (c - 1.0, self.flags[i] & ABOVE_EPS != 0),
         };
         let det = b * b - 4.0 * a * c;
         if det >= 0.0 {
@@ -569,20 +781,20 @@ impl<'a> Marcher<'a> {
         }
     }
 
+    #[inline]
     fn update_first(&self, i: usize) -> f64 {
-        let c = self.g.coords(i);
         let (mut a, mut b, mut cc) = (0.0, 0.0, 0.0);
-        for axis in 0..self.g.nd {
+        for axis in 0..self.topo.nd() {
             let mut value = f64::MAX;
             for step in [-1, 1] {
-                if let Some(n) = self.frozen(i, &c, axis, step) {
+                if let Some(n) = self.frozen(i, axis, step) {
                     if self.dist[n].abs() < value.abs() {
                         value = self.dist[n];
                     }
                 }
             }
             if value < f64::MAX {
-                let w = self.g.idx2[axis];
+                let w = self.sp.idx2[axis];
                 a += w;
                 b -= w * 2.0 * value;
                 cc += w * (value * value);
@@ -592,20 +804,21 @@ impl<'a> Marcher<'a> {
         self.quadratic(i, a, b, cc).unwrap_or(-b / (2.0 * a))
     }
 
+    #[inline]
     fn update_second(&self, i: usize) -> Result<f64> {
-        if let Kind::Travel { .. } = self.kind {
+        if self.kind == Kind::Travel {
             let t = self.travel_second(i, 0);
             if t == f64::INFINITY {
                 return Err(invalid(format!(
-                    "no second-order update reaches flat index {i}"
+                    "no second-order update reaches flat index {}",
+                    self.topo.user_index(i)
                 )));
             }
             return Ok(t);
         }
-        let c = self.g.coords(i);
         let (mut a, mut b, mut cc) = (0.0, 0.0, 0.0);
-        for axis in 0..self.g.nd {
-            let (v1, v2) = self.upwind_pair(i, &c, axis, false);
+        for axis in 0..self.topo.nd() {
+            let (v1, v2) = self.upwind_pair(i, axis, false);
             self.accumulate(axis, v1, v2, &mut a, &mut b, &mut cc);
         }
         Ok(self
@@ -616,30 +829,21 @@ impl<'a> Marcher<'a> {
     /// Along `axis`: the frozen neighbour nearest the contour, and the frozen cell beyond it
     /// where it is no nearer (`f64::MAX` for either when missing). The travel time counts the
     /// far cell negative when `phi` changes sign on the way.
-    #[inline]
-    fn upwind_pair(
-        &self,
-        i: usize,
-        c: &[usize; MAX_DIMENSIONS],
-        axis: usize,
-        travel: bool,
-    ) -> (f64, f64) {
+    #[inline(always)]
+    fn upwind_pair(&self, i: usize, axis: usize, travel: bool) -> (f64, f64) {
         let mut v1 = f64::MAX;
         let mut v2 = f64::MAX;
         for step in [-1, 1] {
-            let Some(n) = self.frozen(i, c, axis, step) else {
+            let Some(n) = self.frozen(i, axis, step) else {
                 continue;
             };
             if self.dist[n].abs() < v1.abs() {
                 v1 = self.dist[n];
-                if let Some(n2) = self.frozen(i, c, axis, 2 * step) {
+                if let Some(n2) = self.frozen(i, axis, 2 * step) {
                     let d2 = self.dist[n2];
                     if (d2 <= v1 && v1 >= 0.0) || (d2 >= v1 && v1 <= 0.0) {
                         v2 = d2;
-                        if travel
-                            && (self.phi[n2] * self.phi[n] < 0.0
-                                || self.phi[n2] * self.phi[i] < 0.0)
-                        {
+                        if travel && (self.opposite(n2, n) || self.opposite(n2, i)) {
                             v2 = -v2;
                         }
                     }
@@ -649,9 +853,9 @@ impl<'a> Marcher<'a> {
         (v1, v2)
     }
 
-    #[inline]
+    #[inline(always)]
     fn accumulate(&self, axis: usize, v1: f64, v2: f64, a: &mut f64, b: &mut f64, c: &mut f64) {
-        let w = self.g.idx2[axis];
+        let w = self.sp.idx2[axis];
         if v2 < f64::MAX {
             let tp = ONE_THIRD * (4.0 * v1 - v2);
             *a += w * AA;
@@ -667,30 +871,30 @@ impl<'a> Marcher<'a> {
     /// The second-order travel time over the axes not in `avoid` (a bit set); where its
     /// quadratic has no root, the least over leaving out one more axis.
     fn travel_second(&self, i: usize, avoid: u32) -> f64 {
-        let c = self.g.coords(i);
+        let nd = self.topo.nd();
         let (mut a, mut b, mut cc) = (0.0, 0.0, 0.0);
-        for axis in 0..self.g.nd {
+        for axis in 0..nd {
             if avoid & (1 << axis) != 0 {
                 continue;
             }
-            let (v1, v2) = self.upwind_pair(i, &c, axis, true);
+            let (v1, v2) = self.upwind_pair(i, axis, true);
             self.accumulate(axis, v1, v2, &mut a, &mut b, &mut cc);
         }
         if let Some(t) = self.quadratic(i, a, b, cc) {
             return t;
         }
-        if avoid.count_ones() as usize == self.g.nd {
+        if avoid.count_ones() as usize == nd {
             return f64::INFINITY;
         }
         let mut best: Option<f64> = None;
-        for axis in 0..self.g.nd {
+        for axis in 0..nd {
             if avoid & (1 << axis) != 0 {
                 continue;
             }
             let t = self.travel_second(i, avoid | (1 << axis));
             // The first answer stands unless a later one is smaller (as std::min_element).
             best = Some(match best {
-                Some(b) if !(t < b) => b,
+                Some(b) if t.partial_cmp(&b) != Some(std::cmp::Ordering::Less) => b,
                 _ => t,
             });
         }
@@ -700,51 +904,37 @@ impl<'a> Marcher<'a> {
     /// Freezes the cells on the zero contour and beside it.
     fn freeze_contour(&mut self) -> Result<()> {
         let n = self.flags.len();
-        let speed = match &self.kind {
-            Kind::Extension { speed, .. } => Some(*speed),
-            _ => None,
-        };
+        let extend = self.kind == Kind::Extension;
         for i in 0..n {
-            if self.flags[i] != MASK && self.phi[i] == 0.0 {
-                self.flags[i] = FROZEN;
+            if self.state(i) != MASK && self.phi[i] == 0.0 {
+                self.set_state(i, FROZEN);
                 self.dist[i] = 0.0;
-                if let (Some(s), Kind::Extension { velocity, .. }) = (speed, &mut self.kind) {
-                    velocity[i] = s[i];
+                if extend {
+                    self.velocity[i] = self.speed.expect("extension has a speed")[i];
                 }
             }
         }
         for i in 0..n {
-            if self.flags[i] != FAR {
+            if self.state(i) != FAR {
                 continue;
             }
-            let c = self.g.coords(i);
             let p = self.phi[i];
             let mut ldist = [0.0f64; MAX_DIMENSIONS];
             let mut lspeed = [0.0f64; MAX_DIMENSIONS];
             let mut borders = false;
-            for axis in 0..self.g.nd {
+            for axis in 0..self.topo.nd() {
                 for step in [-1, 1] {
-                    let Some(nb) = self.neighbour(i, &c, axis, step, MASK) else {
+                    let Some(nb) = self.neighbour(i, axis, step, MASK) else {
                         continue;
                     };
                     let q = self.phi[nb];
                     if p * q < 0.0 {
                         borders = true;
-                        let d = self.g.dx[axis] * p / (p - q);
+                        let d = self.sp.dx[axis] * p / (p - q);
                         if ldist[axis] == 0.0 || ldist[axis] > d {
                             ldist[axis] = d;
-                            if let Kind::Extension {
-                                speed, ext_mask, ..
-                            } = &self.kind
-                            {
-                                let masked = |k: usize| ext_mask.is_some_and(|m| m[k]);
-                                lspeed[axis] = if masked(i) {
-                                    speed[nb]
-                                } else if masked(nb) {
-                                    speed[i]
-                                } else {
-                                    speed[i] + d / self.g.dx[axis] * (speed[nb] - speed[i])
-                                };
+                            if extend {
+                                lspeed[axis] = self.contour_speed(i, nb, d, axis);
                             }
                         }
                     }
@@ -753,9 +943,10 @@ impl<'a> Marcher<'a> {
             if !borders {
                 continue;
             }
-            if let Kind::Extension { velocity, .. } = &mut self.kind {
+            let nd = self.topo.nd();
+            if extend {
                 let (mut num, mut den) = (0.0, 0.0);
-                for axis in 0..self.g.nd {
+                for axis in 0..nd {
                     if ldist[axis] != 0.0 {
                         let w = 1.0 / (ldist[axis] * ldist[axis]);
                         num += lspeed[axis] * w;
@@ -764,60 +955,70 @@ impl<'a> Marcher<'a> {
                 }
                 if den == 0.0 {
                     return Err(invalid(format!(
-                        "the extension velocity on the contour at flat index {i} divides by zero"
+                        "the extension velocity on the contour at flat index {} divides by zero",
+                        self.topo.user_index(i)
                     )));
                 }
-                velocity[i] = num / den;
+                self.velocity[i] = num / den;
             }
             let mut dsum = 0.0;
-            for &d in &ldist[..self.g.nd] {
+            for &d in &ldist[..nd] {
                 if d > 0.0 {
                     dsum += 1.0 / d / d;
                 }
             }
             let d = (1.0 / dsum).sqrt();
-            self.dist[i] = match self.kind {
-                Kind::Travel { speed } => (d / speed[i]).abs(),
+            self.dist[i] = match (self.speed, self.kind) {
+                (Some(speed), Kind::Travel) => (d / speed[i]).abs(),
                 _ if p < 0.0 => -d,
                 _ => d,
             };
-            self.flags[i] = FROZEN;
+            self.set_state(i, FROZEN);
         }
         Ok(())
+    }
+
+    /// The speed on the contour between cell `i` and its neighbour `nb`, `d` from `i` along
+    /// `axis`: interpolated, or the other cell's where one is in the extension mask.
+    fn contour_speed(&self, i: usize, nb: usize, d: f64, axis: usize) -> f64 {
+        let speed = self.speed.expect("extension has a speed");
+        let masked = |k: usize| self.ext_mask.is_some_and(|m| m[k]);
+        if masked(i) {
+            speed[nb]
+        } else if masked(nb) {
+            speed[i]
+        } else {
+            speed[i] + d / self.sp.dx[axis] * (speed[nb] - speed[i])
+        }
     }
 
     /// The extension velocity of a newly frozen cell from its frozen neighbours, weighted by
     /// how far each lies upwind (grad v . grad d = 0).
     fn extend_to(&mut self, i: usize) -> Result<()> {
-        let c = self.g.coords(i);
         let (mut num, mut den) = (0.0, 0.0);
-        let Kind::Extension { velocity, .. } = &self.kind else {
-            return Ok(());
-        };
-        for axis in 0..self.g.nd {
+        for axis in 0..self.topo.nd() {
             let mut ld = 0.0f64;
             let mut ls = 0.0f64;
             for step in [-1, 1] {
-                if let Some(n) = self.frozen(i, &c, axis, step) {
+                if let Some(n) = self.frozen(i, axis, step) {
                     let d = self.dist[i] - self.dist[n];
                     if (ld == 0.0 || ld > d) && d.abs() > f64::EPSILON {
                         ld = d;
-                        ls = velocity[n];
+                        ls = self.velocity[n];
                     }
                 }
             }
-            num += ld.abs() * ls * self.g.idx2[axis];
-            den += ld.abs() * self.g.idx2[axis];
+            num += ld.abs() * ls * self.sp.idx2[axis];
+            den += ld.abs() * self.sp.idx2[axis];
         }
         if den == 0.0 {
             return Err(invalid(format!(
-                "the extension velocity at flat index {i} divides by zero: no frozen neighbour \
-                 lies upwind"
+                "the extension velocity at flat index {} divides by zero: no frozen neighbour \
+                 lies upwind",
+                self.topo.user_index(i)
             )));
         }
-        if let Kind::Extension { velocity, .. } = &mut self.kind {
-            velocity[i] = num / den;
-        }
+        self.velocity[i] = num / den;
         Ok(())
     }
 }
