@@ -6,7 +6,7 @@
   and get the path and every pose as NumPy arrays.
 """
 
-from . import fmm
+from . import fmm, rooms
 from ._envfield import __version__
 
-__all__ = ["fmm", "__version__"]
+__all__ = ["fmm", "rooms", "__version__"]

@@ -12,6 +12,8 @@ use numpy::{IntoPyArray, PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn, PyUntyp
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 
+mod rooms;
+
 fn to_py(e: EikonalError) -> PyErr {
     let text = e.to_string();
     if text.contains("divides by zero") || text.contains("internal") || text.contains("self-test") {
@@ -135,6 +137,14 @@ fn descend<'py>(
 fn _envfield(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(march, m)?)?;
     m.add_function(wrap_pyfunction!(descend, m)?)?;
+    m.add_class::<rooms::PyScene>()?;
+    m.add_class::<rooms::PyRegion>()?;
+    m.add_class::<rooms::PyPlan>()?;
+    let joints: Vec<&str> = envfield::affordance::Joint::ALL
+        .iter()
+        .map(|j| j.name())
+        .collect();
+    m.add("JOINTS", joints)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }
