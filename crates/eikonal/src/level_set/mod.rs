@@ -288,6 +288,9 @@ trait Topology {
     fn wraps(&self, axis: usize) -> bool;
     /// The caller's flat index of cell `i`.
     fn user_index(&self, i: usize) -> usize;
+    /// Asks the cache for the records around cell `i` that its neighbours' updates will read.
+    #[inline(always)]
+    fn prefetch_around(&self, _recs: &[Rec], _i: usize, _reach: usize) {}
 }
 
 /// A grid of `ND` axes, none wrapping, stored with two cells of masked padding on every
@@ -369,6 +372,33 @@ impl<const ND: usize> Topology for Padded<ND> {
     #[inline(always)]
     fn wraps(&self, _axis: usize) -> bool {
         false
+    }
+
+    /// The cells `reach` steps along each axis but the last (whose cells share `i`'s cache
+    /// lines): `i` is the queue's next cell, so its records are in the cache by the time it is
+    /// frozen (the front visits cells in order of value, not of address).
+    #[inline(always)]
+    fn prefetch_around(&self, recs: &[Rec], i: usize, reach: usize) {
+        #[cfg(target_arch = "x86_64")]
+        {
+            use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+            let base = recs.as_ptr();
+            for a in 0..ND - 1 {
+                let s = self.stride[a];
+                for d in 1..=reach {
+                    // A prefetch is a hint that never faults; `wrapping_*` forms no reference.
+                    // SAFETY: `_mm_prefetch` has no memory-safety requirement.
+                    unsafe {
+                        _mm_prefetch::<_MM_HINT_T0>(base.wrapping_add(i + d * s) as *const i8);
+                        _mm_prefetch::<_MM_HINT_T0>(
+                            base.wrapping_add(i).wrapping_sub(d * s) as *const i8
+                        );
+                    }
+                }
+            }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        let _ = (recs, i, reach);
     }
 
     fn user_index(&self, mut i: usize) -> usize {
@@ -535,13 +565,27 @@ struct Marcher<'a, T: Topology> {
     phi: &'a [f64],
     speed: Option<&'a [f64]>,
     ext_mask: Option<&'a [bool]>,
-    flags: Vec<u8>,
-    dist: Vec<f64>,
+    recs: Vec<Rec>,
+    /// Tentative values of queued cells (signed; the queue holds their magnitudes).
+    tent: Vec<f64>,
     velocity: Vec<f64>,
     order: Order,
     narrow: f64,
     self_test: bool,
     kind: Kind,
+}
+
+/// One cell of the march: its frozen value, its queue position while queued, and its flags
+/// (the state in the low bits, `phi`'s sign above), in one record so that a neighbour's state
+/// and value share a cache line.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(16))]
+struct Rec {
+    /// The frozen value; `f64::MAX` until the cell is frozen (and for ever where it is
+    /// masked), so that reading a neighbour's value needs no test of its state.
+    known: f64,
+    pos: u32,
+    flags: u8,
 }
 
 /// Second-order weights: `(3/2)^2` and one third.
@@ -554,33 +598,43 @@ impl<'a, T: Topology> Marcher<'a, T> {
         sp: Spacing,
         options: &LevelSetOptions,
         kind: Kind,
-        mut flags: Vec<u8>,
+        flags: Vec<u8>,
         (phi, speed, ext_mask): (&'a [f64], Option<&'a [f64]>, Option<&'a [bool]>),
     ) -> Self {
         let n = flags.len();
-        for (f, &p) in flags.iter_mut().zip(phi) {
-            if p > f64::EPSILON {
-                *f |= ABOVE_EPS;
-            }
-            if p > 0.0 {
-                *f |= POSITIVE;
-            } else if p < 0.0 {
-                *f |= NEGATIVE;
-            }
-        }
+        let recs = flags
+            .iter()
+            .zip(phi)
+            .map(|(&f, &p)| {
+                let mut flags = f;
+                if p > f64::EPSILON {
+                    flags |= ABOVE_EPS;
+                }
+                if p > 0.0 {
+                    flags |= POSITIVE;
+                } else if p < 0.0 {
+                    flags |= NEGATIVE;
+                }
+                Rec {
+                    known: f64::MAX,
+                    pos: 0,
+                    flags,
+                }
+            })
+            .collect();
         Self {
             topo,
             sp,
             phi,
             speed,
             ext_mask,
-            dist: vec![0.0; n],
+            recs,
+            tent: vec![0.0; n],
             velocity: if kind == Kind::Extension {
                 vec![0.0; n]
             } else {
                 Vec::new()
             },
-            flags,
             order: options.order,
             narrow: options.narrow,
             self_test: options.self_test,
@@ -596,46 +650,50 @@ impl<'a, T: Topology> Marcher<'a, T> {
         flags: impl Fn(&[u8]) -> Vec<u8>,
     ) -> Result<Outcome> {
         self.march()?;
-        for (v, &f) in self.dist.iter_mut().zip(&self.flags) {
-            if f & STATE != FROZEN {
-                *v = f64::MAX;
-            }
-        }
+        let frozen: Vec<u8> = self.recs.iter().map(|r| r.flags & STATE).collect();
+        let dist: Vec<f64> = self.recs.iter().map(|r| r.known).collect();
         let velocity = (self.kind == Kind::Extension).then(|| {
-            for (v, &f) in self.velocity.iter_mut().zip(&self.flags) {
-                if f & STATE != FROZEN {
+            for (v, &f) in self.velocity.iter_mut().zip(&frozen) {
+                if f != FROZEN {
                     *v = f64::MAX;
                 }
             }
             values(&self.velocity)
         });
-        let reached = flags(&self.flags)
-            .into_iter()
-            .map(|f| f & STATE == FROZEN)
-            .collect();
+        let reached = flags(&frozen).into_iter().map(|f| f == FROZEN).collect();
         Ok((
             Marched {
-                values: values(&self.dist),
+                values: values(&dist),
                 reached,
             },
             velocity,
         ))
     }
 
+    /// With `self_test`, the queue's invariant checked.
+    #[inline(always)]
+    fn checked(&self, heap: &Heap) -> Result<()> {
+        if self.self_test {
+            heap.check(&self.recs)
+        } else {
+            Ok(())
+        }
+    }
+
     #[inline(always)]
     fn state(&self, i: usize) -> u8 {
-        self.flags[i] & STATE
+        self.recs[i].flags & STATE
     }
 
     #[inline(always)]
     fn set_state(&mut self, i: usize, state: u8) {
-        self.flags[i] = self.flags[i] & !STATE | state;
+        self.recs[i].flags = self.recs[i].flags & !STATE | state;
     }
 
     /// Whether `phi` has strictly opposite signs at `a` and `b` (`phi[a] * phi[b] < 0`).
     #[inline(always)]
     fn opposite(&self, a: usize, b: usize) -> bool {
-        let (fa, fb) = (self.flags[a], self.flags[b]);
+        let (fa, fb) = (self.recs[a].flags, self.recs[b].flags);
         (fa & POSITIVE != 0 && fb & NEGATIVE != 0) || (fa & NEGATIVE != 0 && fb & POSITIVE != 0)
     }
 
@@ -650,6 +708,16 @@ impl<'a, T: Topology> Marcher<'a, T> {
         Some(n)
     }
 
+    /// The frozen value of the cell `step` cells along `axis` and that cell; `f64::MAX` where
+    /// it is not frozen (or, with `usize::MAX`, off the grid).
+    #[inline(always)]
+    fn known(&self, i: usize, axis: usize, step: isize) -> (f64, usize) {
+        match self.topo.step(i, axis, step) {
+            Some(n) => (self.recs[n].known, n),
+            None => (f64::MAX, usize::MAX),
+        }
+    }
+
     /// A frozen neighbour `step` cells along `axis`.
     #[inline(always)]
     fn frozen(&self, i: usize, axis: usize, step: isize) -> Option<usize> {
@@ -659,13 +727,17 @@ impl<'a, T: Topology> Marcher<'a, T> {
 
     fn march(&mut self) -> Result<()> {
         self.freeze_contour()?;
-        let mut heap = Heap::new(self.flags.len(), self.self_test);
+        let mut heap = Heap::new();
         self.first_band(&mut heap)?;
-        if !self.flags.iter().any(|&f| f & STATE == FROZEN) {
+        if !self.recs.iter().any(|r| r.flags & STATE == FROZEN) {
             return Err(EikonalError::NoZeroContour);
         }
         let mut batch = Vec::new();
-        while let Some((cell, value)) = heap.pop()? {
+        // Past the L2 cache the next cell's neighbourhood is fetched ahead.
+        let prefetch = self.recs.len() >= 1 << 16;
+        let reach = if self.order == Order::Second { 3 } else { 2 };
+        while let Some((cell, value)) = heap.pop(&mut self.recs) {
+            self.checked(&heap)?;
             if self.narrow != 0.0 && value > self.narrow {
                 break;
             }
@@ -673,9 +745,15 @@ impl<'a, T: Topology> Marcher<'a, T> {
             self.freeze(cell)?;
             batch.push(cell);
             while heap.peek() == Some(value) {
-                let (cell, _) = heap.pop()?.expect("peeked");
+                let (cell, _) = heap.pop(&mut self.recs).expect("peeked");
+                self.checked(&heap)?;
                 self.freeze(cell)?;
                 batch.push(cell);
+            }
+            if prefetch {
+                if let Some(next) = heap.peek_cell() {
+                    self.topo.prefetch_around(&self.recs, next, reach);
+                }
             }
             for &cell in &batch {
                 self.update_around(cell, &mut heap)?;
@@ -686,6 +764,7 @@ impl<'a, T: Topology> Marcher<'a, T> {
 
     #[inline]
     fn freeze(&mut self, i: usize) -> Result<()> {
+        self.recs[i].known = self.tent[i];
         self.set_state(i, FROZEN);
         if self.kind == Kind::Extension {
             self.extend_to(i)?;
@@ -703,28 +782,31 @@ impl<'a, T: Topology> Marcher<'a, T> {
                         NARROW => {
                             let d = self.update(n)?;
                             if d != 0.0 {
-                                heap.set(n, d.abs())?;
-                                self.dist[n] = d;
+                                heap.set(n, d.abs(), &mut self.recs);
+                                self.checked(heap)?;
+                                self.tent[n] = d;
                             }
                         }
                         FAR => {
                             let d = self.update(n)?;
                             if d != 0.0 {
-                                self.dist[n] = d;
+                                self.tent[n] = d;
                                 self.set_state(n, NARROW);
-                                heap.push(n, d.abs())?;
+                                heap.push(n, d.abs(), &mut self.recs);
+                                self.checked(heap)?;
                             }
                         }
                         _ => {}
                     }
                 }
-                if self.order == Order::Second && self.frozen(cell, axis, step).is_some() {
+                if self.order == Order::Second && self.known(cell, axis, step).0 != f64::MAX {
                     if let Some(n2) = self.neighbour(cell, axis, 2 * step, FROZEN) {
                         if self.state(n2) == NARROW {
                             let d = self.update_second(n2)?;
                             if d != 0.0 {
-                                heap.set(n2, d.abs())?;
-                                self.dist[n2] = d;
+                                heap.set(n2, d.abs(), &mut self.recs);
+                                self.checked(heap)?;
+                                self.tent[n2] = d;
                             }
                         }
                     }
@@ -736,7 +818,7 @@ impl<'a, T: Topology> Marcher<'a, T> {
 
     /// The far cells beside the frozen contour, queued with their first values.
     fn first_band(&mut self, heap: &mut Heap) -> Result<()> {
-        for i in 0..self.flags.len() {
+        for i in 0..self.recs.len() {
             if self.state(i) != FAR {
                 continue;
             }
@@ -746,8 +828,9 @@ impl<'a, T: Topology> Marcher<'a, T> {
             if touches {
                 self.set_state(i, NARROW);
                 let d = self.update(i)?;
-                self.dist[i] = d;
-                heap.push(i, d.abs())?;
+                self.tent[i] = d;
+                heap.push(i, d.abs(), &mut self.recs);
+                self.checked(heap)?;
             }
         }
         Ok(())
@@ -767,7 +850,7 @@ impl<'a, T: Topology> Marcher<'a, T> {
     fn quadratic(&self, i: usize, a: f64, b: f64, c: f64) -> Option<f64> {
         let (c, larger) = match self.speed {
             Some(speed) if self.kind == Kind::Travel => (c - 1.0 / (speed[i] * speed[i]), true),
-            _ => (c - 1.0, self.flags[i] & ABOVE_EPS != 0),
+            _ => (c - 1.0, self.recs[i].flags & ABOVE_EPS != 0),
         };
         let det = b * b - 4.0 * a * c;
         if det >= 0.0 {
@@ -785,14 +868,15 @@ impl<'a, T: Topology> Marcher<'a, T> {
     fn update_first(&self, i: usize) -> f64 {
         let (mut a, mut b, mut cc) = (0.0, 0.0, 0.0);
         for axis in 0..self.topo.nd() {
-            let mut value = f64::MAX;
-            for step in [-1, 1] {
-                if let Some(n) = self.frozen(i, axis, step) {
-                    if self.dist[n].abs() < value.abs() {
-                        value = self.dist[n];
-                    }
-                }
-            }
+            // The frozen neighbour nearest the contour, the lower side on a tie (f64::MAX where
+            // neither is frozen).
+            let (below, _) = self.known(i, axis, -1);
+            let (above, _) = self.known(i, axis, 1);
+            let value = if above.abs() < below.abs() {
+                above
+            } else {
+                below
+            };
             if value < f64::MAX {
                 let w = self.sp.idx2[axis];
                 a += w;
@@ -833,19 +917,17 @@ impl<'a, T: Topology> Marcher<'a, T> {
     fn upwind_pair(&self, i: usize, axis: usize, travel: bool) -> (f64, f64) {
         let mut v1 = f64::MAX;
         let mut v2 = f64::MAX;
+        // As scikit-fmm: the far cell is looked at on the side the near one is taken from, and
+        // one found on the lower side stays when the upper side's near cell is nearer.
         for step in [-1, 1] {
-            let Some(n) = self.frozen(i, axis, step) else {
-                continue;
-            };
-            if self.dist[n].abs() < v1.abs() {
-                v1 = self.dist[n];
-                if let Some(n2) = self.frozen(i, axis, 2 * step) {
-                    let d2 = self.dist[n2];
-                    if (d2 <= v1 && v1 >= 0.0) || (d2 >= v1 && v1 <= 0.0) {
-                        v2 = d2;
-                        if travel && (self.opposite(n2, n) || self.opposite(n2, i)) {
-                            v2 = -v2;
-                        }
+            let (near, n) = self.known(i, axis, step);
+            if near.abs() < v1.abs() {
+                v1 = near;
+                let (far, n2) = self.known(i, axis, 2 * step);
+                if far != f64::MAX && ((far <= v1 && v1 >= 0.0) || (far >= v1 && v1 <= 0.0)) {
+                    v2 = far;
+                    if travel && (self.opposite(n2, n) || self.opposite(n2, i)) {
+                        v2 = -v2;
                     }
                 }
             }
@@ -903,12 +985,12 @@ impl<'a, T: Topology> Marcher<'a, T> {
 
     /// Freezes the cells on the zero contour and beside it.
     fn freeze_contour(&mut self) -> Result<()> {
-        let n = self.flags.len();
+        let n = self.recs.len();
         let extend = self.kind == Kind::Extension;
         for i in 0..n {
             if self.state(i) != MASK && self.phi[i] == 0.0 {
                 self.set_state(i, FROZEN);
-                self.dist[i] = 0.0;
+                self.recs[i].known = 0.0;
                 if extend {
                     self.velocity[i] = self.speed.expect("extension has a speed")[i];
                 }
@@ -968,7 +1050,7 @@ impl<'a, T: Topology> Marcher<'a, T> {
                 }
             }
             let d = (1.0 / dsum).sqrt();
-            self.dist[i] = match (self.speed, self.kind) {
+            self.recs[i].known = match (self.speed, self.kind) {
                 (Some(speed), Kind::Travel) => (d / speed[i]).abs(),
                 _ if p < 0.0 => -d,
                 _ => d,
@@ -1001,7 +1083,7 @@ impl<'a, T: Topology> Marcher<'a, T> {
             let mut ls = 0.0f64;
             for step in [-1, 1] {
                 if let Some(n) = self.frozen(i, axis, step) {
-                    let d = self.dist[i] - self.dist[n];
+                    let d = self.recs[i].known - self.recs[n].known;
                     if (ld == 0.0 || ld > d) && d.abs() > f64::EPSILON {
                         ld = d;
                         ls = self.velocity[n];
