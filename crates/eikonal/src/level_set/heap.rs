@@ -15,8 +15,33 @@ const ARITY: usize = 4;
 
 #[derive(Clone, Copy)]
 struct Entry {
+    /// The value's magnitude, as bits.
     key: u64,
     cell: u32,
+    /// Whether the value is negative (a signed distance inside the contour): the queue hands
+    /// the signed value back without a second array.
+    negative: bool,
+}
+
+impl Entry {
+    #[inline(always)]
+    fn new(cell: usize, value: f64) -> Self {
+        Entry {
+            key: key(value.abs()),
+            cell: cell as u32,
+            negative: value < 0.0,
+        }
+    }
+
+    #[inline(always)]
+    fn value(self) -> f64 {
+        let v = f64::from_bits(self.key);
+        if self.negative {
+            -v
+        } else {
+            v
+        }
+    }
 }
 
 pub(super) struct Heap {
@@ -36,26 +61,20 @@ impl Heap {
         }
     }
 
-    /// Queues `cell`, which is not queued, with `value`.
+    /// Queues `cell`, which is not queued, with the signed `value` (ordered by magnitude).
     #[inline]
     pub(super) fn push(&mut self, cell: usize, value: f64, recs: &mut [Rec]) {
         let k = self.entries.len();
-        let e = Entry {
-            key: key(value),
-            cell: cell as u32,
-        };
+        let e = Entry::new(cell, value);
         self.entries.push(e);
         self.sift_up(k, e, recs);
     }
 
-    /// Moves queued `cell` to `value`.
+    /// Moves queued `cell` to the signed `value`.
     #[inline]
     pub(super) fn set(&mut self, cell: usize, value: f64, recs: &mut [Rec]) {
         let k = recs[cell].pos as usize;
-        let e = Entry {
-            key: key(value),
-            cell: cell as u32,
-        };
+        let e = Entry::new(cell, value);
         if e.key < self.entries[k].key {
             self.sift_up(k, e, recs);
         } else {
@@ -63,7 +82,7 @@ impl Heap {
         }
     }
 
-    /// The smallest value queued.
+    /// The smallest magnitude queued.
     #[inline]
     pub(super) fn peek(&self) -> Option<f64> {
         self.entries.first().map(|e| f64::from_bits(e.key))
@@ -75,7 +94,7 @@ impl Heap {
         self.entries.first().map(|e| e.cell as usize)
     }
 
-    /// Takes the smallest `(cell, value)` off the queue.
+    /// Takes the `(cell, signed value)` of the smallest magnitude off the queue.
     #[inline]
     pub(super) fn pop(&mut self, recs: &mut [Rec]) -> Option<(usize, f64)> {
         let top = *self.entries.first()?;
@@ -97,7 +116,7 @@ impl Heap {
             // ...and the last entry rises from there to its place.
             self.sift_up(k, last, recs);
         }
-        Some((top.cell as usize, f64::from_bits(top.key)))
+        Some((top.cell as usize, top.value()))
     }
 
     #[inline(always)]

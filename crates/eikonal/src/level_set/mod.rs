@@ -288,6 +288,8 @@ trait Topology {
     fn wraps(&self, axis: usize) -> bool;
     /// The caller's flat index of cell `i`.
     fn user_index(&self, i: usize) -> usize;
+    /// One value per cell in the caller's order, `f` of each cell's index here.
+    fn gather<U>(&self, f: impl FnMut(usize) -> U) -> Vec<U>;
     /// Asks the cache for the records around cell `i` that its neighbours' updates will read.
     #[inline(always)]
     fn prefetch_around(&self, _recs: &[Rec], _i: usize, _reach: usize) {}
@@ -339,22 +341,20 @@ impl<const ND: usize> Padded<ND> {
         })
     }
 
-    fn pad<T: Copy>(&self, src: &[T], fill: T) -> Vec<T> {
+    /// The padded grid: `fill` on the padding, `f` of the caller's index elsewhere.
+    fn fill<U: Copy>(&self, fill: U, mut f: impl FnMut(usize) -> U) -> Vec<U> {
         let len = self.shape[ND - 1];
         let mut out = vec![fill; self.cells()];
         for (s, d) in self.rows() {
-            out[d..d + len].copy_from_slice(&src[s..s + len]);
+            for (j, o) in out[d..d + len].iter_mut().enumerate() {
+                *o = f(s + j);
+            }
         }
         out
     }
 
-    fn unpad<T: Copy>(&self, src: &[T]) -> Vec<T> {
-        let len = self.shape[ND - 1];
-        let mut out = Vec::with_capacity(self.shape.iter().product());
-        for (_, d) in self.rows() {
-            out.extend_from_slice(&src[d..d + len]);
-        }
-        out
+    fn pad<T: Copy>(&self, src: &[T], fill: T) -> Vec<T> {
+        self.fill(fill, |k| src[k])
     }
 }
 
@@ -399,6 +399,15 @@ impl<const ND: usize> Topology for Padded<ND> {
         }
         #[cfg(not(target_arch = "x86_64"))]
         let _ = (recs, i, reach);
+    }
+
+    fn gather<U>(&self, mut f: impl FnMut(usize) -> U) -> Vec<U> {
+        let len = self.shape[ND - 1];
+        let mut out = Vec::with_capacity(self.shape.iter().product());
+        for (_, d) in self.rows() {
+            out.extend((d..d + len).map(&mut f));
+        }
+        out
     }
 
     fn user_index(&self, mut i: usize) -> usize {
@@ -465,6 +474,11 @@ impl Topology for Wrapped {
     fn user_index(&self, i: usize) -> usize {
         i
     }
+
+    fn gather<U>(&self, f: impl FnMut(usize) -> U) -> Vec<U> {
+        let n = self.stride[0] * self.shape[0];
+        (0..n).map(f).collect()
+    }
 }
 
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -527,8 +541,13 @@ fn run(
         _ => {
             let topo = Wrapped::new(set.shape, &sp);
             let arrays = (input.phi, input.speed, input.ext_mask);
-            let m = Marcher::new(topo, sp, options, kind, input.flags, arrays);
-            m.run(|v| v.to_vec(), |f| f.to_vec())
+            let recs = input
+                .flags
+                .iter()
+                .zip(input.phi)
+                .map(|(&f, &p)| Rec::new(f, p))
+                .collect();
+            Marcher::new(topo, sp, options, kind, recs, arrays).run()
         }
     }
 }
@@ -549,14 +568,14 @@ fn padded<const ND: usize>(
     input: Input<'_>,
 ) -> Result<Outcome> {
     let topo = Padded::<ND>::new(shape);
-    let flags = topo.pad(&input.flags, MASK);
+    let recs = topo.fill(Rec::new(MASK, 0.0), |k| {
+        Rec::new(input.flags[k], input.phi[k])
+    });
     let phi = topo.pad(input.phi, 0.0);
     let speed = input.speed.map(|s| topo.pad(s, 1.0));
     let ext_mask = input.ext_mask.map(|e| topo.pad(e, false));
-    let layout = Padded::<ND>::new(shape);
     let arrays = (phi.as_slice(), speed.as_deref(), ext_mask.as_deref());
-    let m = Marcher::new(topo, sp, options, kind, flags, arrays);
-    m.run(|v| layout.unpad(v), |f| layout.unpad(f))
+    Marcher::new(topo, sp, options, kind, recs, arrays).run()
 }
 
 struct Marcher<'a, T: Topology> {
@@ -566,8 +585,6 @@ struct Marcher<'a, T: Topology> {
     speed: Option<&'a [f64]>,
     ext_mask: Option<&'a [bool]>,
     recs: Vec<Rec>,
-    /// Tentative values of queued cells (signed; the queue holds their magnitudes).
-    tent: Vec<f64>,
     velocity: Vec<f64>,
     order: Order,
     narrow: f64,
@@ -588,6 +605,26 @@ struct Rec {
     flags: u8,
 }
 
+impl Rec {
+    /// A cell not yet frozen, in `state`, with `phi`'s sign.
+    fn new(state: u8, phi: f64) -> Self {
+        let mut flags = state;
+        if phi > f64::EPSILON {
+            flags |= ABOVE_EPS;
+        }
+        if phi > 0.0 {
+            flags |= POSITIVE;
+        } else if phi < 0.0 {
+            flags |= NEGATIVE;
+        }
+        Rec {
+            known: f64::MAX,
+            pos: 0,
+            flags,
+        }
+    }
+}
+
 /// Second-order weights: `(3/2)^2` and one third.
 const AA: f64 = 9.0 / 4.0;
 const ONE_THIRD: f64 = 1.0 / 3.0;
@@ -598,30 +635,10 @@ impl<'a, T: Topology> Marcher<'a, T> {
         sp: Spacing,
         options: &LevelSetOptions,
         kind: Kind,
-        flags: Vec<u8>,
+        recs: Vec<Rec>,
         (phi, speed, ext_mask): (&'a [f64], Option<&'a [f64]>, Option<&'a [bool]>),
     ) -> Self {
-        let n = flags.len();
-        let recs = flags
-            .iter()
-            .zip(phi)
-            .map(|(&f, &p)| {
-                let mut flags = f;
-                if p > f64::EPSILON {
-                    flags |= ABOVE_EPS;
-                }
-                if p > 0.0 {
-                    flags |= POSITIVE;
-                } else if p < 0.0 {
-                    flags |= NEGATIVE;
-                }
-                Rec {
-                    known: f64::MAX,
-                    pos: 0,
-                    flags,
-                }
-            })
-            .collect();
+        let n = recs.len();
         Self {
             topo,
             sp,
@@ -629,7 +646,6 @@ impl<'a, T: Topology> Marcher<'a, T> {
             speed,
             ext_mask,
             recs,
-            tent: vec![0.0; n],
             velocity: if kind == Kind::Extension {
                 vec![0.0; n]
             } else {
@@ -642,32 +658,22 @@ impl<'a, T: Topology> Marcher<'a, T> {
         }
     }
 
-    /// Marches, then hands the values back through `values` and `flags` (the layout's
-    /// unpadding).
-    fn run(
-        mut self,
-        values: impl Fn(&[f64]) -> Vec<f64>,
-        flags: impl Fn(&[u8]) -> Vec<u8>,
-    ) -> Result<Outcome> {
+    /// Marches, then hands the values back in the caller's layout.
+    fn run(mut self) -> Result<Outcome> {
         self.march()?;
-        let frozen: Vec<u8> = self.recs.iter().map(|r| r.flags & STATE).collect();
-        let dist: Vec<f64> = self.recs.iter().map(|r| r.known).collect();
+        let recs = &self.recs;
+        let values = self.topo.gather(|i| recs[i].known);
+        let reached = self.topo.gather(|i| recs[i].flags & STATE == FROZEN);
         let velocity = (self.kind == Kind::Extension).then(|| {
-            for (v, &f) in self.velocity.iter_mut().zip(&frozen) {
-                if f != FROZEN {
-                    *v = f64::MAX;
+            self.topo.gather(|i| {
+                if recs[i].flags & STATE == FROZEN {
+                    self.velocity[i]
+                } else {
+                    f64::MAX
                 }
-            }
-            values(&self.velocity)
+            })
         });
-        let reached = flags(&frozen).into_iter().map(|f| f == FROZEN).collect();
-        Ok((
-            Marched {
-                values: values(&dist),
-                reached,
-            },
-            velocity,
-        ))
+        Ok((Marched { values, reached }, velocity))
     }
 
     /// With `self_test`, the queue's invariant checked.
@@ -736,18 +742,19 @@ impl<'a, T: Topology> Marcher<'a, T> {
         // Past the L2 cache the next cell's neighbourhood is fetched ahead.
         let prefetch = self.recs.len() >= 1 << 16;
         let reach = if self.order == Order::Second { 3 } else { 2 };
-        while let Some((cell, value)) = heap.pop(&mut self.recs) {
+        while let Some((cell, signed)) = heap.pop(&mut self.recs) {
             self.checked(&heap)?;
+            let value = signed.abs();
             if self.narrow != 0.0 && value > self.narrow {
                 break;
             }
             batch.clear();
-            self.freeze(cell)?;
+            self.freeze(cell, signed)?;
             batch.push(cell);
             while heap.peek() == Some(value) {
-                let (cell, _) = heap.pop(&mut self.recs).expect("peeked");
+                let (cell, signed) = heap.pop(&mut self.recs).expect("peeked");
                 self.checked(&heap)?;
-                self.freeze(cell)?;
+                self.freeze(cell, signed)?;
                 batch.push(cell);
             }
             if prefetch {
@@ -763,8 +770,8 @@ impl<'a, T: Topology> Marcher<'a, T> {
     }
 
     #[inline]
-    fn freeze(&mut self, i: usize) -> Result<()> {
-        self.recs[i].known = self.tent[i];
+    fn freeze(&mut self, i: usize, value: f64) -> Result<()> {
+        self.recs[i].known = value;
         self.set_state(i, FROZEN);
         if self.kind == Kind::Extension {
             self.extend_to(i)?;
@@ -782,17 +789,15 @@ impl<'a, T: Topology> Marcher<'a, T> {
                         NARROW => {
                             let d = self.update(n)?;
                             if d != 0.0 {
-                                heap.set(n, d.abs(), &mut self.recs);
+                                heap.set(n, d, &mut self.recs);
                                 self.checked(heap)?;
-                                self.tent[n] = d;
                             }
                         }
                         FAR => {
                             let d = self.update(n)?;
                             if d != 0.0 {
-                                self.tent[n] = d;
                                 self.set_state(n, NARROW);
-                                heap.push(n, d.abs(), &mut self.recs);
+                                heap.push(n, d, &mut self.recs);
                                 self.checked(heap)?;
                             }
                         }
@@ -804,9 +809,8 @@ impl<'a, T: Topology> Marcher<'a, T> {
                         if self.state(n2) == NARROW {
                             let d = self.update_second(n2)?;
                             if d != 0.0 {
-                                heap.set(n2, d.abs(), &mut self.recs);
+                                heap.set(n2, d, &mut self.recs);
                                 self.checked(heap)?;
-                                self.tent[n2] = d;
                             }
                         }
                     }
@@ -828,8 +832,7 @@ impl<'a, T: Topology> Marcher<'a, T> {
             if touches {
                 self.set_state(i, NARROW);
                 let d = self.update(i)?;
-                self.tent[i] = d;
-                heap.push(i, d.abs(), &mut self.recs);
+                heap.push(i, d, &mut self.recs);
                 self.checked(heap)?;
             }
         }
@@ -1006,11 +1009,13 @@ impl<'a, T: Topology> Marcher<'a, T> {
             let mut borders = false;
             for axis in 0..self.topo.nd() {
                 for step in [-1, 1] {
-                    let Some(nb) = self.neighbour(i, axis, step, MASK) else {
+                    let Some(nb) = self.topo.step(i, axis, step) else {
                         continue;
                     };
                     let q = self.phi[nb];
-                    if p * q < 0.0 {
+                    // Masked cells (the padding among them, whose phi is 0) take no part,
+                    // but on an axis that wraps (as scikit-fmm).
+                    if p * q < 0.0 && (self.topo.wraps(axis) || self.state(nb) != MASK) {
                         borders = true;
                         let d = self.sp.dx[axis] * p / (p - q);
                         if ldist[axis] == 0.0 || ldist[axis] > d {
