@@ -20,6 +20,10 @@ use envfield::grid::{Cell2, Cell3, MoveRule, Neighbourhood2};
 use std::hint::black_box;
 use std::time::Duration;
 
+// As the examples and the Python module: freed pages are kept for the next solve.
+#[global_allocator]
+static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 fn bench_2d(c: &mut Criterion) {
     let mut group = c.benchmark_group("fmm_2d");
     for n in [28usize, 256, 1024] {

@@ -732,12 +732,12 @@ impl<'a, T: Topology> Marcher<'a, T> {
     }
 
     fn march(&mut self) -> Result<()> {
-        self.freeze_contour()?;
-        let mut heap = Heap::new();
-        self.first_band(&mut heap)?;
-        if !self.recs.iter().any(|r| r.flags & STATE == FROZEN) {
+        let contour = self.freeze_contour()?;
+        if contour.is_empty() {
             return Err(EikonalError::NoZeroContour);
         }
+        let mut heap = Heap::new();
+        self.first_band(&contour, &mut heap)?;
         let mut batch = Vec::new();
         // Past the L2 cache the next cell's neighbourhood is fetched ahead.
         let prefetch = self.recs.len() >= 1 << 16;
@@ -821,19 +821,23 @@ impl<'a, T: Topology> Marcher<'a, T> {
     }
 
     /// The far cells beside the frozen contour, queued with their first values.
-    fn first_band(&mut self, heap: &mut Heap) -> Result<()> {
-        for i in 0..self.recs.len() {
-            if self.state(i) != FAR {
-                continue;
-            }
-            let touches = (0..self.topo.nd()).any(|axis| {
-                self.frozen(i, axis, -1).is_some() || self.frozen(i, axis, 1).is_some()
-            });
-            if touches {
-                self.set_state(i, NARROW);
-                let d = self.update(i)?;
-                heap.push(i, d, &mut self.recs);
-                self.checked(heap)?;
+    /// (A cell is beside a frozen one exactly when that one is beside it, so the band is
+    /// found from the contour's cells rather than by a pass over the grid; the values depend
+    /// only on the frozen cells, not on the order they are found in.)
+    fn first_band(&mut self, contour: &[usize], heap: &mut Heap) -> Result<()> {
+        for &f in contour {
+            for axis in 0..self.topo.nd() {
+                for step in [-1, 1] {
+                    let Some(i) = self.topo.step(f, axis, step) else {
+                        continue;
+                    };
+                    if self.state(i) == FAR {
+                        self.set_state(i, NARROW);
+                        let d = self.update(i)?;
+                        heap.push(i, d, &mut self.recs);
+                        self.checked(heap)?;
+                    }
+                }
             }
         }
         Ok(())
@@ -987,23 +991,26 @@ impl<'a, T: Topology> Marcher<'a, T> {
     }
 
     /// Freezes the cells on the zero contour and beside it.
-    fn freeze_contour(&mut self) -> Result<()> {
+    /// Returns the frozen cells. (One pass: whether a cell borders the contour depends on
+    /// `phi` and the mask alone, not on which cells are frozen already.)
+    fn freeze_contour(&mut self) -> Result<Vec<usize>> {
         let n = self.recs.len();
         let extend = self.kind == Kind::Extension;
+        let mut contour = Vec::new();
         for i in 0..n {
-            if self.state(i) != MASK && self.phi[i] == 0.0 {
+            if self.state(i) == MASK {
+                continue;
+            }
+            let p = self.phi[i];
+            if p == 0.0 {
                 self.set_state(i, FROZEN);
                 self.recs[i].known = 0.0;
                 if extend {
                     self.velocity[i] = self.speed.expect("extension has a speed")[i];
                 }
-            }
-        }
-        for i in 0..n {
-            if self.state(i) != FAR {
+                contour.push(i);
                 continue;
             }
-            let p = self.phi[i];
             let mut ldist = [0.0f64; MAX_DIMENSIONS];
             let mut lspeed = [0.0f64; MAX_DIMENSIONS];
             let mut borders = false;
@@ -1061,8 +1068,9 @@ impl<'a, T: Topology> Marcher<'a, T> {
                 _ => d,
             };
             self.set_state(i, FROZEN);
+            contour.push(i);
         }
-        Ok(())
+        Ok(contour)
     }
 
     /// The speed on the contour between cell `i` and its neighbour `nb`, `d` from `i` along
