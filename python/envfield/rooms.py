@@ -40,7 +40,7 @@ class Scene:
 
     @classmethod
     def read(cls, path, up=None, units=None):
-        """Reads ``path``. ``up``: "z", "y", "-y", ...; ``units``: "m", "cm", "mm" or metres
+        """Reads ``path``. ``up``: "z" or "y"; ``units``: "m", "cm", "mm" or metres
         per unit, as a string or a number. Raises OSError naming the file where it cannot be
         read."""
         if units is not None and not isinstance(units, str):

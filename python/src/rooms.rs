@@ -32,7 +32,7 @@ pub struct PyScene {
 
 #[pymethods]
 impl PyScene {
-    /// Reads an OBJ, PLY, glTF or GLB file. `up` ("z", "y" or "-y"...) and `units` ("m",
+    /// Reads an OBJ, PLY, glTF or GLB file. `up` ("z" or "y") and `units` ("m",
     /// "cm", "mm" or metres per unit) override what the format fixes (glTF: y up, metres) or
     /// what is guessed.
     #[staticmethod]
