@@ -75,7 +75,7 @@ struct Args {
     save_field: Option<PathBuf>,
     /// Keep every trained room field in this folder (named for the room, a fingerprint of its
     /// region and the training's settings, and the steps) and load it from there on the next
-    /// run, so a second run of the tables skips the training.
+    /// run, so a second run of the tables skips the training; a scene's (`--scene`) too.
     #[arg(long)]
     fields: Option<PathBuf>,
     /// RRT* budget of the second row (raised until its path ratio matches ours).
@@ -124,12 +124,14 @@ fn room_field(
     region: &AccessibleRegion,
 ) -> Result<(FieldNet, Option<f64>)> {
     let generated = args.scene.scene.is_none();
+    // A kept field's file carries its region's fingerprint in its name, so a scene's field is
+    // kept and found again as a generated room's is (another scene is another region).
     let mut cfg = Field3Config::default();
     (cfg.steps, cfg.seed) = (args.field_steps, seed);
     let shipped = root().join(format!("models/room_field_{seed}.safetensors"));
     let store = FieldStore {
         named: args.field.clone().filter(|_| k == 0),
-        kept: args.fields.clone().filter(|_| generated),
+        kept: args.fields.clone(),
         shipped: Some(shipped)
             .filter(|_| generated && !args.scene.catalogue && !args.scene.apartment),
     };
@@ -185,6 +187,23 @@ fn check(args: &Args) -> Result<()> {
              room's)",
             args.rooms
         );
+    }
+    // Where the fields go is checked before any field is trained (8 minutes a room).
+    if let Some(dir) = &args.fields {
+        if dir.exists() && !dir.is_dir() {
+            bail!(
+                "--fields {} is a file: it names the folder learned fields are kept in",
+                dir.display()
+            );
+        }
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("--fields {}: creating the folder", dir.display()))?;
+        envfield::grid::check_writable(dir.join("room_field.safetensors"))
+            .with_context(|| format!("--fields {}", dir.display()))?;
+    }
+    if let Some(p) = &args.save_field {
+        envfield::grid::check_writable(p)
+            .with_context(|| format!("--save-field {}", p.display()))?;
     }
     if args.big_budget > 1_000_000 {
         bail!(

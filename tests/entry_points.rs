@@ -891,6 +891,67 @@ fn flags_that_would_be_ignored_are_refused() {
             ),
             "--save-field",
         );
+        // Where fields go is checked before the training, not after it.
+        refuses(
+            run(&nav, &["--fields", &s, "--pairs", "1", "--out", &out]),
+            "is a file",
+        );
+        let missing = dir.join("no/such/f.safetensors");
+        refuses(
+            run(
+                &nav,
+                &["--save-field", &missing.to_string_lossy(), "--out", &out],
+            ),
+            "--save-field",
+        );
     }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Issue 56: `room_nav --fields DIR` on a scene keeps the trained field and loads it on the
+/// next run (it kept nothing: every run trained again).
+#[test]
+fn a_scenes_field_is_kept_and_found_again() {
+    let (Some(acc), Some(nav)) = (example("accessible"), example("room_nav")) else {
+        return;
+    };
+    let dir = scratch("scene_fields");
+    let room = dir.join("room").to_string_lossy().into_owned();
+    let made = run(&acc, &["--no-field", "--out", &room]);
+    assert!(
+        made.status.success(),
+        "{}",
+        String::from_utf8_lossy(&made.stderr)
+    );
+    let scene = format!("{room}/scene.obj");
+    let (fields, out) = (
+        dir.join("fields").to_string_lossy().into_owned(),
+        dir.join("out").to_string_lossy().into_owned(),
+    );
+    let go = || {
+        let args = ["--scene", &scene, "--fields", &fields, "--field-steps", "2"];
+        let more = [
+            "--planners",
+            "ours",
+            "--pairs",
+            "1",
+            "--json",
+            "--out",
+            &out,
+        ];
+        run(&nav, &[&args[..], &more].concat())
+    };
+    let first = go();
+    assert!(
+        first.status.success(),
+        "{}",
+        String::from_utf8_lossy(&first.stderr)
+    );
+    let kept = std::fs::read_dir(&fields).unwrap().count();
+    assert_eq!(kept, 1, "one field kept for the scene");
+    let second = go();
+    let err = String::from_utf8_lossy(&second.stderr);
+    assert!(second.status.success(), "{err}");
+    assert!(err.contains("field loaded from"), "{err}");
     std::fs::remove_dir_all(&dir).ok();
 }
