@@ -765,6 +765,12 @@ fn nothing_a_user_saved_is_lost_and_far_scenes_are_refused() {
             &["--steps", "3", "--resume", &ckpt, "--out", &out],
         ];
         refuses(run(&train, &args.concat()), "trains nothing");
+        // A checkpoint of another architecture than --arch (the data differ): refused, the
+        // model kept (it trained the plain network on the context network's data).
+        let other = [
+            "--arch", "context", "--size", "8", "--steps", "9", "--resume", &ckpt, "--out", &out,
+        ];
+        refuses(run(&train, &other), "--arch plain");
         assert_eq!(std::fs::read(&out).unwrap(), before);
     }
     // A user's scene, named scene.obj, in the folder given as --out.

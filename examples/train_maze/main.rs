@@ -75,6 +75,18 @@ fn main() -> Result<()> {
             if let Some(note) = note {
                 eprintln!("{note}");
             }
+            // The data differ by architecture (one maze for plain and goal fields), so a
+            // checkpoint of another one than --arch would be trained on the wrong data.
+            let theirs = t.net().config().arch();
+            if theirs != args.arch.name() {
+                bail!(
+                    "{} is a {theirs} network, but --arch is {}: pass --arch {theirs} to continue \
+                     it ({} is left as it is)",
+                    path.display(),
+                    args.arch,
+                    args.out.display()
+                );
+            }
             eprintln!("resumed {} at step {}", path.display(), t.step());
             let stop = args.stop_at.map_or(args.steps, |s| s.min(args.steps));
             if stop <= t.step() {
