@@ -19,12 +19,12 @@ mod rooms;
 #[global_allocator]
 static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
+/// A march that cannot go on is a `RuntimeError` (as scikit-fmm's); input it refuses, a
+/// `ValueError`.
 fn to_py(e: EikonalError) -> PyErr {
-    let text = e.to_string();
-    if text.contains("divides by zero") || text.contains("internal") || text.contains("self-test") {
-        PyRuntimeError::new_err(text)
-    } else {
-        PyValueError::new_err(text)
+    match e {
+        EikonalError::March(text) => PyRuntimeError::new_err(text),
+        other => PyValueError::new_err(other.to_string()),
     }
 }
 

@@ -58,6 +58,10 @@ pub enum EikonalError {
     /// what and where.
     #[error("{0}")]
     LevelSet(String),
+    /// A level-set march that cannot go on (an extension velocity dividing by zero, no
+    /// update reaching a cell, the queue's self-test failing); the text names where.
+    #[error("{0}")]
+    March(String),
     /// A level set without a zero contour: `phi` never changes sign and is nowhere 0 (outside
     /// the mask), so no front can start.
     #[error("the array phi contains no zero contour (no zero level set)")]

@@ -182,13 +182,13 @@ impl Heap {
         for (k, e) in self.entries.iter().enumerate() {
             let pos = recs[e.cell as usize].pos as usize;
             if pos != k {
-                return Err(EikonalError::LevelSet(format!(
+                return Err(EikonalError::March(format!(
                     "heap self-test: cell {} at position {k} is recorded at {pos}",
                     e.cell
                 )));
             }
             if k > 0 && self.entries[(k - 1) / ARITY].key > e.key {
-                return Err(EikonalError::LevelSet(format!(
+                return Err(EikonalError::March(format!(
                     "heap self-test: position {k} is smaller than its parent"
                 )));
             }

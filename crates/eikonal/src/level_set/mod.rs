@@ -900,7 +900,7 @@ impl<'a, T: Topology> Marcher<'a, T> {
         if self.kind == Kind::Travel {
             let t = self.travel_second(i, 0);
             if t == f64::INFINITY {
-                return Err(invalid(format!(
+                return Err(EikonalError::March(format!(
                     "no second-order update reaches flat index {}",
                     self.topo.user_index(i)
                 )));
@@ -1048,7 +1048,7 @@ impl<'a, T: Topology> Marcher<'a, T> {
                     }
                 }
                 if den == 0.0 {
-                    return Err(invalid(format!(
+                    return Err(EikonalError::March(format!(
                         "the extension velocity on the contour at flat index {} divides by zero",
                         self.topo.user_index(i)
                     )));
@@ -1107,7 +1107,7 @@ impl<'a, T: Topology> Marcher<'a, T> {
             den += ld.abs() * self.sp.idx2[axis];
         }
         if den == 0.0 {
-            return Err(invalid(format!(
+            return Err(EikonalError::March(format!(
                 "the extension velocity at flat index {} divides by zero: no frozen neighbour \
                  lies upwind",
                 self.topo.user_index(i)
