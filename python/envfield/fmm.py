@@ -39,7 +39,7 @@ def _phi_and_mask(phi):
     return data, mask
 
 
-def _doubles(a, what, message):
+def _doubles(a, message):
     """``a`` as a C-ordered float64 array of 1 to 12 axes (no copy when it is one already),
     or ValueError(message) where NumPy would not cast it safely."""
     a = np.asarray(a)
@@ -81,10 +81,10 @@ def _march(kind, phi, speed, dx, self_test, order, narrow, periodic, ext_mask=No
     order = operator.index(order)
     if order not in (1, 2):
         raise ValueError("order must be 1 or 2")
-    data = _doubles(data, "phi", "phi must be a 1 to 12-D array of doubles")
+    data = _doubles(data, "phi must be a 1 to 12-D array of doubles")
     dx = _spacing(dx, data.ndim)
     if speed is not None:
-        speed = _doubles(speed, "speed", "speed must be a 1D to 12-D array of doubles")
+        speed = _doubles(speed, "speed must be a 1D to 12-D array of doubles")
         if speed.shape != data.shape:
             raise ValueError("phi and speed must have the same shape")
     if len(dx) != data.ndim:
@@ -209,7 +209,7 @@ def path(field, start, dx=1.0):
     else:
         values = np.asarray(field)
         reached = np.isfinite(values)
-    values = _doubles(values, "field", "field must be a 1 to 12-D array of doubles")
+    values = _doubles(values, "field must be a 1 to 12-D array of doubles")
     reached = np.ascontiguousarray(reached, dtype=bool)
     dx = _spacing(dx, values.ndim)
     if len(dx) != values.ndim:

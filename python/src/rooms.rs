@@ -6,7 +6,7 @@ use envfield::affordance::{
 };
 use envfield::grid::Point3m;
 use envfield::rooms::harness::{
-    run_pair, FloorPlanner, Pair, PairKind, RoomContext, RoomPlanner, RunSettings,
+    run_pair, FloorPlanner, Pair, RoomContext, RoomPlanner, RunSettings,
 };
 use envfield::rooms::{sample_region, AccessibleRegion, SceneTables};
 use envfield::scene::{generate_room, read_scene, ImportConfig, RoomConfig, Scene};
@@ -103,13 +103,7 @@ impl PyScene {
         py.detach(move || -> PyResult<PyRegion> {
             let samples = match samples {
                 Some(n) => n,
-                None => {
-                    let b = scene
-                        .aabb()
-                        .ok_or_else(|| PyValueError::new_err("the scene is empty"))?;
-                    let area = ((b.maxs.x - b.mins.x) * (b.maxs.y - b.mins.y)).max(1.0);
-                    (area * envfield::rooms::sampling::SAMPLES_PER_M2).ceil() as usize
-                }
+                None => envfield::rooms::sampling::samples_for(&scene).map_err(value_error)?,
             };
             envfield::rooms::sampling::check_sample_density(&scene, samples)
                 .map_err(value_error)?;
@@ -201,14 +195,7 @@ impl PyRegion {
         seed: u64,
     ) -> PyResult<PyPlan> {
         let gait = walk(&WalkConfig::default(), seed).map_err(value_error)?;
-        let pair = Pair {
-            start,
-            goal,
-            sequence: gait,
-            repeat: true,
-            kind: PairKind::Walk,
-        };
-        self.plan(py, pair, planner, seed)
+        self.plan(py, Pair::walking(start, goal, gait), planner, seed)
     }
 
     /// Sitting down at the region's sit-down number `index` (see `sit_downs`), from its

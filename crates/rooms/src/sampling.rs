@@ -71,6 +71,25 @@ pub fn sample_region(
     AccessibleRegion::from_drawn(scene, &drawn, &RegionConfig::default())
 }
 
+/// The x and y extents of `scene`'s box and its area (at least 1 m²).
+fn floor_extent(scene: &Scene) -> Result<([f32; 2], f32)> {
+    let aabb = scene
+        .aabb()
+        .ok_or_else(|| RoomsError::InvalidInput("the scene is empty".into()))?;
+    let extent = aabb.maxs - aabb.mins;
+    Ok(([extent.x, extent.y], (extent.x * extent.y).max(1.0)))
+}
+
+/// The torso samples the shipped setup draws for `scene`: [`SAMPLES_PER_M2`] over its box's
+/// floor.
+///
+/// # Errors
+/// [`RoomsError::InvalidInput`] for an empty scene.
+pub fn samples_for(scene: &Scene) -> Result<usize> {
+    let (_, area) = floor_extent(scene)?;
+    Ok((area * SAMPLES_PER_M2).ceil() as usize)
+}
+
 /// Torso samples per square metre of floor the shipped setup draws (6000 in a generated room
 /// of about 25 m²): fewer leave the region in specks.
 pub const SAMPLES_PER_M2: f32 = 240.0;
@@ -87,11 +106,7 @@ pub const MAX_SAMPLES: usize = 1_000_000;
 /// [`RoomsError::InvalidInput`] for a scene whose floor needs more than [`MAX_SAMPLES`], or
 /// an empty scene.
 pub fn check_sample_density(scene: &Scene, samples: usize) -> Result<Option<String>> {
-    let aabb = scene
-        .aabb()
-        .ok_or_else(|| RoomsError::InvalidInput("the scene is empty".into()))?;
-    let extent = aabb.maxs - aabb.mins;
-    let area = (extent.x * extent.y).max(1.0);
+    let (extent, area) = floor_extent(scene)?;
     let needed = (area * SAMPLES_PER_M2).ceil();
     if needed > MAX_SAMPLES as f32 {
         return Err(RoomsError::InvalidInput(format!(
@@ -100,7 +115,7 @@ pub fn check_sample_density(scene: &Scene, samples: usize) -> Result<Option<Stri
              the {MAX_SAMPLES} allowed: build a scene this large's region from its surfaces \
              instead (the `level` example, AccessibleRegion::standing), or is it in \
              centimetres? (--units cm)",
-            extent.x, extent.y
+            extent[0], extent[1]
         )));
     }
     let density = samples as f32 / area;

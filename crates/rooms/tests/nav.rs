@@ -161,9 +161,7 @@ impl envfield_rooms::harness::FloorPlanner for Straight {
 fn ours_reads_its_field_and_distances_once_and_the_costs_are_split() {
     use envfield_grid::ContinuousField3;
     use envfield_nets::{FieldNet, GoalConfig, ModelConfig};
-    use envfield_rooms::harness::{
-        run_pair, Pair, PairKind, RoomContext, RoomPlanner, RunSettings,
-    };
+    use envfield_rooms::harness::{run_pair, Pair, RoomContext, RoomPlanner, RunSettings};
     use envfield_rooms::LearnedField3;
 
     let scene = scene();
@@ -205,13 +203,7 @@ fn ours_reads_its_field_and_distances_once_and_the_costs_are_split() {
 
     let (tables, tables_s) = RoomContext::tables(&scene).unwrap();
     assert!(tables_s > 0.0 && tables.bytes() > 0);
-    let pair = Pair {
-        start,
-        goal,
-        sequence: gait,
-        repeat: true,
-        kind: PairKind::Walk,
-    };
+    let pair = Pair::walking(start, goal, gait);
     let mut room = RoomContext {
         scene: &scene,
         region: &region,

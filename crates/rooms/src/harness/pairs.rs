@@ -44,6 +44,17 @@ pub struct Pair {
 }
 
 impl Pair {
+    /// A walk from `start` to `goal`, `gait` repeated along the path.
+    pub fn walking(start: Point3m, goal: Point3m, gait: PoseSequence) -> Self {
+        Self {
+            start,
+            goal,
+            sequence: gait,
+            repeat: true,
+            kind: PairKind::Walk,
+        }
+    }
+
     /// The pair a region's sit-down makes: from its standing start to seated, its poses played
     /// once.
     ///
@@ -148,13 +159,7 @@ pub fn pairs(
     };
     let mut out: Vec<Pair> = ends
         .into_iter()
-        .map(|(start, goal)| Pair {
-            start,
-            goal,
-            sequence: gait.clone(),
-            repeat: true,
-            kind: PairKind::Walk,
-        })
+        .map(|(start, goal)| Pair::walking(start, goal, gait.clone()))
         .collect();
     if options.sit_downs {
         out.extend(match room {
