@@ -4,8 +4,8 @@
 use envfield_eikonal::FastMarching;
 use envfield_grid::{Cell2, Grid2, Point2};
 use envfield_plan::crowd::{
-    check_trips, closest_approach, orca_crowd, shortest_lengths, walk_crowd, CrowdConfig, CrowdRun,
-    OrcaConfig, Trip,
+    check_trips, closest_approach, grid_pibt, orca_crowd, pibt_crowd, shortest_lengths, walk_crowd,
+    CrowdConfig, CrowdRun, Ending, OrcaConfig, Trip,
 };
 
 mod doorway;
@@ -111,6 +111,8 @@ fn closest_approach_sees_a_crossing_between_frames() {
         arrived_at: vec![None, None],
         waits: 0,
         yields: 0,
+        stay_on_map: false,
+        ending: Ending::StepBudget,
     };
     assert_eq!(run.person_collisions(1.0), 1);
 }
@@ -183,4 +185,78 @@ fn bad_problems_get_clear_errors() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("cannot be reached"), "{e}");
+}
+
+#[test]
+fn pibt_crosses_the_doorway_both_ways() {
+    let grid = two_rooms();
+    let config = CrowdConfig::default();
+    let run = pibt_crowd(&grid, &opposite_trips(), &FastMarching::default(), &config).unwrap();
+    check_doorway(&run, &grid, &config, "PIBT");
+    assert_eq!(run.ending, Ending::Arrived);
+}
+
+#[test]
+fn someone_standing_on_their_goal_in_the_doorway_is_pushed_through_and_walks_back() {
+    let grid = two_rooms();
+    let config = CrowdConfig::default();
+    let trips = [
+        // Reaches the doorway's middle at once and stands there.
+        Trip {
+            start: Cell2::new(10, 14),
+            goal: Cell2::new(10, 20),
+        },
+        // Needs to pass through it.
+        Trip {
+            start: Cell2::new(4, 4),
+            goal: Cell2::new(10, 36),
+        },
+    ];
+    let run = pibt_crowd(&grid, &trips, &FastMarching::default(), &config).unwrap();
+    check_doorway(&run, &grid, &config, "goal in the doorway");
+    // Person 0 stood on the goal and left it again to let person 1 by.
+    let first_home = run
+        .frames
+        .iter()
+        .position(|f| f[0] == Point2::new(10.0, 20.0));
+    let home_at_end = run.arrived_at[0].unwrap();
+    assert!(
+        first_home.is_some_and(|t| t < home_at_end),
+        "person 0 never stepped aside: home at {first_home:?}, at the end since {home_at_end}"
+    );
+}
+
+#[test]
+fn eight_people_swap_rooms_through_one_door_without_gridlock() {
+    let grid = two_rooms();
+    let config = CrowdConfig::default();
+    let left = [(4, 4), (4, 10), (10, 4), (16, 4), (16, 10), (10, 10)];
+    let right = [(4, 36), (4, 30), (10, 36), (16, 36), (16, 30), (10, 30)];
+    let cell = |(r, c): (usize, usize)| Cell2::new(r, c);
+    let trips: Vec<Trip> = (0..4)
+        .map(|k| Trip {
+            start: cell(left[k]),
+            goal: cell(right[k]),
+        })
+        .chain((0..4).map(|k| Trip {
+            start: cell(right[k + 2]),
+            goal: cell(left[k + 2]),
+        }))
+        .collect();
+    let run = pibt_crowd(&grid, &trips, &FastMarching::default(), &config).unwrap();
+    check_doorway(&run, &grid, &config, "eight through one door");
+    assert_eq!(run.ending, Ending::Arrived);
+}
+
+#[test]
+fn grid_pibt_swaps_the_rooms_on_its_lattice() {
+    let grid = two_rooms();
+    let config = CrowdConfig::default();
+    let run = grid_pibt(&grid, &opposite_trips(), &config, 1).unwrap();
+    assert_eq!(run.ending, Ending::Arrived, "{:?}", run.arrived_at);
+    assert_eq!(run.obstacle_collisions(&grid), 0);
+    // One body per 5-cell vertex: every frame's people stand a diameter apart or more.
+    for frame in &run.frames[1..] {
+        assert!(frame[0].distance(frame[1]) >= 5.0 - 1e-3);
+    }
 }

@@ -24,14 +24,18 @@
 //! loops alike.
 
 mod geometry;
+mod grid_pibt;
 mod orca;
+mod pibt;
 mod run;
 mod step;
 mod trips;
 
 pub use geometry::{closest_approach, mark_discs};
+pub use grid_pibt::grid_pibt;
 pub use orca::{orca_crowd, OrcaConfig, OrcaCrowd};
-pub use run::CrowdRun;
+pub use pibt::{pibt_crowd, PibtCrowd};
+pub use run::{CrowdRun, Ending};
 pub use step::{walk_crowd, Crowd};
 pub use trips::{check_trips, random_trips, shortest_lengths};
 

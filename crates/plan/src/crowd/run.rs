@@ -16,6 +16,26 @@ pub struct CrowdRun {
     pub waits: usize,
     /// Person-steps spent yielding (stepping out of a higher-priority person's way).
     pub yields: usize,
+    /// Whether people stay on the map after reaching their goal (and may leave it again), as
+    /// in [`pibt_crowd`](super::pibt_crowd), or leave it, as in Algorithm 1. With `true`,
+    /// `arrived_at[i]` is the step person `i` last stepped onto their goal, if they stand
+    /// there at the end.
+    #[serde(default)]
+    pub stay_on_map: bool,
+    /// Why the loop stopped.
+    #[serde(default)]
+    pub ending: Ending,
+}
+
+/// Why a crowd loop stopped.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Ending {
+    /// Everyone reached their goal.
+    Arrived,
+    /// The step budget ran out with someone short of their goal (`arrived_at` says who).
+    #[default]
+    StepBudget,
 }
 
 impl CrowdRun {
@@ -26,6 +46,8 @@ impl CrowdRun {
             arrived_at: vec![None; starts.len()],
             waits: 0,
             yields: 0,
+            stay_on_map: false,
+            ending: Ending::StepBudget,
         }
     }
 
@@ -41,7 +63,12 @@ impl CrowdRun {
 
     /// Whether person `i` is on the map during the step from frame `t` to `t + 1`.
     pub(crate) fn walking(&self, i: usize, t: usize) -> bool {
-        self.arrived_at[i].is_none_or(|a| t < a)
+        self.stay_on_map || self.arrived_at[i].is_none_or(|a| t < a)
+    }
+
+    /// Whether everyone stands on (or, in Algorithm 1, has reached) their goal.
+    pub fn all_arrived(&self) -> bool {
+        self.arrived_at.iter().all(Option::is_some)
     }
 
     /// Person `i`'s positions up to their arrival (or the last frame), waits included.

@@ -1,0 +1,323 @@
+//! Priority inheritance with backtracking over the fields' steps: [`pibt_crowd`] and
+//! [`PibtCrowd`], a step rule that does not gridlock where Algorithm 1 does.
+
+use super::geometry::{candidates, closest_approach, mark_discs, point, predict_where_free};
+use super::geometry::{segment_clear, value_at};
+use super::{check_trips, CrowdConfig, CrowdRun, Ending, Trip};
+use crate::Result;
+use envfield_grid::{Cell2, Field2, FieldModel, Grid2, Point2};
+
+/// Calls of the recursive choice per person and time step after which a person who failed
+/// to make way is not asked again (plain PIBT asks once).
+const TRIES_PER_PERSON: usize = 64;
+
+/// Several people by priority inheritance with backtracking (PIBT, Okumura et al. 2019/2022)
+/// over continuous steps, guided by `model`'s fields, until everyone stands on their goal at
+/// once or `config.max_steps` steps. [`PibtCrowd`] takes the same loop a step at a time; its
+/// docs have the rule.
+///
+/// ```
+/// use envfield_eikonal::FastMarching;
+/// use envfield_grid::{Cell2, Grid2};
+/// use envfield_plan::crowd::{pibt_crowd, CrowdConfig, Ending, Trip};
+///
+/// // A corridor one body wide joins two rooms; two people swap rooms through it.
+/// let mut obstacles = vec![false; 30 * 41];
+/// for row in 0..30 {
+///     for col in 18..23 {
+///         obstacles[row * 41 + col] = row != 15;
+///     }
+/// }
+/// let floor = Grid2::from_obstacles(30, 41, obstacles)?;
+/// let trips = [
+///     Trip { start: Cell2::new(15, 5), goal: Cell2::new(15, 35) },
+///     Trip { start: Cell2::new(15, 35), goal: Cell2::new(15, 5) },
+/// ];
+/// let config = CrowdConfig::default();
+/// let run = pibt_crowd(&floor, &trips, &FastMarching::default(), &config)?;
+/// assert_eq!(run.ending, Ending::Arrived);
+/// assert_eq!(run.person_collisions(config.body_radius), 0);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+///
+/// # Errors
+/// A bad problem ([`check_trips`]); the model's errors.
+pub fn pibt_crowd(
+    walkable: &Grid2,
+    trips: &[Trip],
+    model: &impl FieldModel,
+    config: &CrowdConfig,
+) -> Result<CrowdRun> {
+    let mut crowd = PibtCrowd::new(walkable, trips, model, config)?;
+    while crowd.run.steps() < config.max_steps && crowd.step()? {}
+    crowd.run.ending = match crowd.run.all_arrived() {
+        true => Ending::Arrived,
+        false => Ending::StepBudget,
+    };
+    Ok(crowd.run)
+}
+
+/// Several people on one walkable map, stepped by priority inheritance with backtracking.
+///
+/// One time step:
+/// 1. **Fields.** For every person off their goal, the map with everyone else's disc marked
+///    and its field for that person's goal, all in one
+///    [`FieldModel::predict_many`](envfield_grid::FieldModel::predict_many) call: Algorithm 1's
+///    batched pass.
+/// 2. **Priority.** Each person's priority is the number of time steps since they last stood
+///    on their goal, plus a fixed fraction of their own to break ties. People on their goal
+///    have the lowest; whoever has waited longest goes first, so everyone comes first in time.
+/// 3. **Steps, in priority order, with inheritance.** A person's candidate ends are the
+///    headings at the step length, half of it and one cell, the goal when within a step, and
+///    standing still. They are ordered by the field on the changed map where it is finite there
+///    (a way round the others), then by the field on the empty map (the way through them).
+///    A candidate is taken if its swept step is clear of the map and, in continuous time, of
+///    every step already chosen. If it would touch exactly one person who has not chosen yet,
+///    that person inherits the priority and must choose a step out of the way first (with the
+///    same rule, recursively); if they cannot, the next candidate is tried (backtracking).
+///    A person who can take no candidate stands, and reports failure to whoever pushed them.
+///
+/// People who reach their goal stay on the map. They are pushed aside like anyone else when
+/// someone needs to pass, and walk back.
+#[derive(Debug)]
+pub struct PibtCrowd<'a, M> {
+    walkable: &'a Grid2,
+    model: &'a M,
+    config: CrowdConfig,
+    goal_cells: Vec<Cell2>,
+    goals: Vec<Point2>,
+    pos: Vec<Point2>,
+    /// Each person's field on the map without people.
+    statics: Vec<Field2>,
+    /// Time steps since each person last stood on their goal, plus a tie-breaking fraction.
+    priority: Vec<f32>,
+    run: CrowdRun,
+}
+
+/// One time step's choices, as the recursion fills them in.
+struct Choice<'f> {
+    /// This step's end for those who have chosen.
+    next: Vec<Option<Point2>>,
+    /// Each person's field on the map with the others marked, where it reaches them.
+    fields: Vec<Option<&'f Field2>>,
+    /// Calls of [`PibtCrowd::choose`] so far this step.
+    tries: usize,
+    /// Calls after which a person who failed to make way stays put for the step.
+    budget: usize,
+}
+
+impl<'a, M: FieldModel> PibtCrowd<'a, M> {
+    /// Everyone at their start, with each person's field on the empty map (one batched
+    /// prediction).
+    ///
+    /// # Errors
+    /// A bad problem ([`check_trips`]); the model's errors.
+    pub fn new(
+        walkable: &'a Grid2,
+        trips: &[Trip],
+        model: &'a M,
+        config: &CrowdConfig,
+    ) -> Result<Self> {
+        check_trips(walkable, trips, config)?;
+        let n = trips.len();
+        let goals: Vec<Point2> = trips.iter().map(|t| point(t.goal)).collect();
+        let pos: Vec<Point2> = trips.iter().map(|t| point(t.start)).collect();
+        let statics =
+            model.predict_many(&trips.iter().map(|t| (walkable, t.goal)).collect::<Vec<_>>())?;
+        let mut run = CrowdRun::starting(&pos);
+        run.stay_on_map = true;
+        Ok(Self {
+            walkable,
+            model,
+            config: *config,
+            goal_cells: trips.iter().map(|t| t.goal).collect(),
+            priority: (0..n).map(|i| (i as f32 + 0.5) / n as f32).collect(),
+            goals,
+            pos,
+            statics,
+            run,
+        })
+    }
+
+    /// Everyone's current position.
+    pub fn positions(&self) -> &[Point2] {
+        &self.pos
+    }
+
+    /// What has happened so far.
+    pub fn run(&self) -> &CrowdRun {
+        &self.run
+    }
+
+    /// The record of every step taken.
+    pub fn into_run(self) -> CrowdRun {
+        self.run
+    }
+
+    /// One time step for everyone (the type's docs). Returns whether anyone is still off
+    /// their goal afterwards (`false` once all stand on them, and then the step does nothing).
+    ///
+    /// # Errors
+    /// The model's errors.
+    pub fn step(&mut self) -> Result<bool> {
+        let n = self.goals.len();
+        let off: Vec<usize> = (0..n).filter(|&i| self.pos[i] != self.goals[i]).collect();
+        if off.is_empty() {
+            return Ok(false);
+        }
+        let changed = self.fields_with_others(&off)?;
+        let mut choice = Choice {
+            next: vec![None; n],
+            fields: vec![None; n],
+            tries: 0,
+            budget: TRIES_PER_PERSON * n,
+        };
+        for (&i, field) in off.iter().zip(&changed) {
+            choice.fields[i] = field
+                .as_ref()
+                .filter(|f| value_at(f, self.pos[i]).is_finite());
+        }
+        let mut order: Vec<usize> = (0..n).collect();
+        order.sort_by(|&a, &b| self.priority[b].total_cmp(&self.priority[a]));
+        for &i in &order {
+            if choice.next[i].is_none() && !self.choose(i, &mut choice) {
+                self.run.waits += 1;
+            }
+        }
+        // The first in priority could not move: whoever stands in their best step's way and
+        // could not make way (cornered) goes first from now on, until they reach their goal.
+        let top = order[0];
+        if self.pos[top] != self.goals[top] && choice.next[top] == Some(self.pos[top]) {
+            if let Some(k) = self.in_the_way(top, choice.fields[top]) {
+                self.priority[k] = self.priority[top].floor() + 1.0 + self.priority[k].fract();
+            }
+        }
+        let t = self.run.steps() + 1;
+        for i in 0..n {
+            let end = choice.next[i].unwrap_or(self.pos[i]);
+            let was_home = self.pos[i] == self.goals[i];
+            self.pos[i] = end;
+            let home = end == self.goals[i];
+            if home {
+                self.priority[i] = self.priority[i].fract();
+                if !was_home {
+                    self.run.arrived_at[i] = Some(t);
+                }
+            } else {
+                self.priority[i] += 1.0;
+                self.run.arrived_at[i] = None;
+            }
+        }
+        self.run.frames.push(self.pos.clone());
+        Ok(!self.run.all_arrived())
+    }
+
+    /// Step 1: the field of each person in `off` on the map with everyone else's disc marked,
+    /// in one batch.
+    fn fields_with_others(&self, off: &[usize]) -> Result<Vec<Option<Field2>>> {
+        let disc = 2.0 * self.config.body_radius;
+        let maps: Vec<Grid2> = off
+            .iter()
+            .map(|&i| {
+                let others = (0..self.pos.len()).filter(|&j| j != i);
+                mark_discs(self.walkable, others.map(|j| self.pos[j]), disc)
+            })
+            .collect::<Result<_>>()?;
+        let goals = off.iter().map(|&i| self.goal_cells[i]);
+        predict_where_free(self.model, &maps, goals)
+    }
+
+    /// Step 3 for person `i` (PIBT's recursive call): takes the first candidate, in `i`'s
+    /// order, that is clear of the map and of every chosen step and whose one unchosen
+    /// neighbour (if any) can make way. Returns `false`, with `i` standing, when none can.
+    fn choose(&mut self, i: usize, choice: &mut Choice<'_>) -> bool {
+        choice.tries += 1;
+        let disc = 2.0 * self.config.body_radius;
+        let from = self.pos[i];
+        for to in self.ordered_candidates(i, choice.fields[i]) {
+            if !segment_clear(self.walkable, from, to) {
+                continue;
+            }
+            let clear_of_chosen = (0..self.pos.len()).all(|k| {
+                k == i
+                    || choice.next[k]
+                        .is_none_or(|end| closest_approach(from, to, self.pos[k], end) >= disc)
+            });
+            if !clear_of_chosen {
+                continue;
+            }
+            let mut in_the_way = (0..self.pos.len()).filter(|&k| {
+                k != i
+                    && choice.next[k].is_none()
+                    && closest_approach(from, to, self.pos[k], self.pos[k]) < disc
+            });
+            let (first, second) = (in_the_way.next(), in_the_way.next());
+            if second.is_some() {
+                // More than one person to move: a pushed person's failure must leave nobody
+                // moved, which holds only with one.
+                continue;
+            }
+            choice.next[i] = Some(to);
+            match first {
+                None => return true,
+                Some(k) => {
+                    if self.choose(k, choice) {
+                        return true;
+                    }
+                    // k could not make way for this candidate. While the step's budget of
+                    // tries lasts, k may be asked again for the next one (a failed call
+                    // leaves nobody moved); after it, k stands, as in PIBT.
+                    if choice.tries < choice.budget {
+                        choice.next[k] = None;
+                    }
+                }
+            }
+        }
+        choice.next[i] = Some(from);
+        false
+    }
+
+    /// The person nearest to `i` among those standing in the way of `i`'s best step clear of
+    /// the map.
+    fn in_the_way(&self, i: usize, changed: Option<&Field2>) -> Option<usize> {
+        let disc = 2.0 * self.config.body_radius;
+        let from = self.pos[i];
+        let to = self
+            .ordered_candidates(i, changed)
+            .into_iter()
+            .find(|&to| to != from && segment_clear(self.walkable, from, to))?;
+        (0..self.pos.len())
+            .filter(|&k| k != i)
+            .map(|k| (k, closest_approach(from, to, self.pos[k], self.pos[k])))
+            .filter(|&(_, d)| d < disc)
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(k, _)| k)
+    }
+
+    /// `i`'s candidate ends, best first: by the changed map's field where it is finite there,
+    /// then by the empty map's field; standing still among them.
+    fn ordered_candidates(&self, i: usize, changed: Option<&Field2>) -> Vec<Point2> {
+        let (from, goal) = (self.pos[i], self.goals[i]);
+        let mut ends = candidates(from, goal, self.config.step_length, self.config.directions);
+        ends.push(from);
+        let statics = &self.statics[i];
+        let at = |field: &Field2, p: Point2| match p == goal {
+            true => -1.0,
+            false => value_at(field, p),
+        };
+        // The way through someone costs them a step out of the way: a candidate's rank is the
+        // smaller of its value round the others and its value through them plus a step.
+        let push = self.config.step_length;
+        let rank = |p: Point2| -> f32 {
+            let through = at(statics, p) + push;
+            changed.map_or(through, |f| at(f, p).min(through))
+        };
+        let mut keyed: Vec<(Point2, f32, f32)> = ends
+            .into_iter()
+            .map(|p| (p, rank(p), at(statics, p)))
+            .filter(|&(_, _, empty)| empty.is_finite())
+            .collect();
+        keyed.sort_by(|a, b| a.1.total_cmp(&b.1).then(a.2.total_cmp(&b.2)));
+        keyed.into_iter().map(|(p, _, _)| p).collect()
+    }
+}
