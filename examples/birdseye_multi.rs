@@ -1,18 +1,21 @@
-//! Several people walking through a room at once, seen from above (paper section 4.1,
-//! Algorithm 1): each person's field on the floor map the others change, predicted for all of
-//! them in one batched pass per time step, against the same loop on the exact solver and
-//! against ORCA.
+//! Several people walking through a room at once, seen from above: our step rule (priority
+//! inheritance with backtracking over the bird's-eye field's steps), the paper's Algorithm 1
+//! (section 4.1: each person's field on the floor map the others change, one batched pass per
+//! time step), each on the learned and the exact field, ORCA, and PIBT on a lattice of one
+//! body per cell as multi-agent path finding writes it.
 //!
 //! `cargo run --release --example birdseye_multi -- --people 4 --seed 3` writes
 //! `out/birdseye/crowd.gif` (the floor map, each person's field contours, positions and
-//! trails), `crowd.json` (paths in metres, arrival steps, pose checks) and each person's
-//! aligned walking sequence `walk_N.json`, and prints a JSON summary.
+//! trails), `crowd.json` (every loop's figures, and the first loop's paths in metres, arrival
+//! steps and pose checks) and each person's aligned walking sequence `walk_N.json`, and prints
+//! a JSON summary (`--json`: the figures only).
 //!
-//! `--rooms 100 --people 4 --json` runs a batch on generated rooms and prints, as its last
-//! line, one JSON object with the learned loop's figures and the same for the exact loop
-//! (`exact_*`) and ORCA (`orca_*`).
+//! `--rooms 100 --people 16 --json` runs a batch on generated rooms and prints, as its last
+//! line, one JSON object with each loop's figures under its name (`ours_reach_pct`,
+//! `alg1_exact_person_collisions`, ...). A room too small for that many people is counted
+//! apart (`rooms_too_small`) and the batch goes on. `--loops ours,orca` runs some loops only.
 //!
-//! `--room FILE.obj|ply` reads a scene (metres, z up) instead of generating one.
+//! `--scene FILE.obj|ply|gltf|glb` reads a scene instead of generating one.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -23,8 +26,10 @@ use envfield::affordance::{walk, Actor, WalkConfig};
 use envfield::eikonal::FastMarching;
 use envfield::grid::{Canvas, Point2};
 use envfield::nets::FieldNet;
+use envfield::grid::Grid2;
 use envfield::plan::crowd::{
-    orca_crowd, random_trips, shortest_lengths, walk_crowd, CrowdConfig, OrcaConfig,
+    grid_pibt, orca_crowd, pibt_crowd, random_trips, shortest_lengths, walk_crowd, CrowdConfig,
+    CrowdRun, OrcaConfig, Trip,
 };
 use envfield::rooms::birdseye::{crowd_frames, CrowdTally, Floor, RESOLUTION};
 use envfield::scene::RoomConfig;
@@ -47,9 +52,13 @@ struct Args {
     /// Run a batch over this many generated rooms (seeds from --seed) and print the figures.
     #[arg(long)]
     rooms: Option<usize>,
-    /// With --rooms: print the batch as one JSON object only.
+    /// Print only the figures, as one JSON object.
     #[arg(long)]
     json: bool,
+    /// The loops to run, comma-separated (all by default; the first is the one drawn and
+    /// written out for one room).
+    #[arg(long, value_enum, value_delimiter = ',')]
+    loops: Vec<Loop>,
     /// The bird's-eye field.
     #[arg(long, default_value = "models/birdseye.safetensors")]
     model: PathBuf,
@@ -78,6 +87,22 @@ struct Args {
     /// --html.
     #[command(flatten)]
     motion: MotionArgs,
+}
+
+impl Args {
+    /// The loops asked for, each once, in the order given; all of them by default.
+    fn loops(&self) -> Vec<Loop> {
+        let mut loops: Vec<Loop> = Vec::new();
+        for &l in &self.loops {
+            if !loops.contains(&l) {
+                loops.push(l);
+            }
+        }
+        match loops.is_empty() {
+            true => Loop::ALL.to_vec(),
+            false => loops,
+        }
+    }
 }
 
 fn main() -> Result<()> {
@@ -136,48 +161,130 @@ fn main() -> Result<()> {
     }
 }
 
+/// The crowd loops this example can run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+#[value(rename_all = "snake_case")]
+enum Loop {
+    /// PIBT over the shipped bird's-eye field's steps (`pibt_crowd`).
+    Ours,
+    /// The same on the exact field (fast marching).
+    OursExact,
+    /// The paper's Algorithm 1 on the shipped field (`walk_crowd`).
+    Alg1,
+    /// Algorithm 1 on the exact field.
+    Alg1Exact,
+    /// ORCA (`orca_crowd`).
+    Orca,
+    /// PIBT on a lattice of one body per cell, as multi-agent path finding writes it.
+    GridPibt,
+}
+
+impl Loop {
+    const ALL: [Loop; 6] = [
+        Loop::Ours,
+        Loop::OursExact,
+        Loop::Alg1,
+        Loop::Alg1Exact,
+        Loop::Orca,
+        Loop::GridPibt,
+    ];
+
+    /// The loop's name in the JSON keys.
+    fn name(self) -> &'static str {
+        match self {
+            Loop::Ours => "ours",
+            Loop::OursExact => "ours_exact",
+            Loop::Alg1 => "alg1",
+            Loop::Alg1Exact => "alg1_exact",
+            Loop::Orca => "orca",
+            Loop::GridPibt => "grid_pibt",
+        }
+    }
+
+    /// Runs the loop on `trips`, with its time in seconds.
+    fn run(
+        self,
+        walkable: &Grid2,
+        trips: &[Trip],
+        model: &FieldNet,
+        config: &CrowdConfig,
+        seed: u64,
+    ) -> Result<(CrowdRun, f64)> {
+        let exact = FastMarching::default();
+        let t = Instant::now();
+        let run = match self {
+            Loop::Ours => pibt_crowd(walkable, trips, model, config)?,
+            Loop::OursExact => pibt_crowd(walkable, trips, &exact, config)?,
+            Loop::Alg1 => walk_crowd(walkable, trips, model, config)?,
+            Loop::Alg1Exact => walk_crowd(walkable, trips, &exact, config)?,
+            Loop::Orca => orca_crowd(walkable, trips, config, &OrcaConfig::default())?,
+            Loop::GridPibt => grid_pibt(walkable, trips, config, seed)?,
+        };
+        Ok((run, t.elapsed().as_secs_f64()))
+    }
+}
+
+/// Bodies' area over the free floor's (the floor map's free cells).
+fn density(floor: &Floor, people: usize, body_radius_m: f32) -> f64 {
+    let free = floor.map.grid.free_count() as f64 * (RESOLUTION as f64).powi(2);
+    people as f64 * std::f64::consts::PI * (body_radius_m as f64).powi(2) / free.max(1e-9)
+}
+
 fn batch(args: &Args, rooms: usize, model: &FieldNet, config: &CrowdConfig) -> Result<()> {
-    let exact = FastMarching::default();
-    let (mut learned, mut fmm, mut orca) = (
-        CrowdTally::default(),
-        CrowdTally::default(),
-        CrowdTally::default(),
-    );
+    let loops = args.loops();
+    let mut tallies = vec![CrowdTally::default(); loops.len()];
     let gait = walk(&WalkConfig::default(), args.seed)?;
     let maker = args.scene.rooms(RoomConfig::birdseye())?;
+    let (mut too_small, mut why_small, mut densities) = (Vec::new(), None, Vec::new());
     for room in args.seed..args.seed + rooms as u64 {
         let scene = maker.room(room)?.scene;
         let floor = Floor::new(scene, args.body_radius)?;
-        let trips = random_trips(&floor.walkable, args.people, config, 1.0 / RESOLUTION, room)?;
+        // A room too small for this many people is counted apart, and the batch goes on.
+        let trips = match random_trips(&floor.walkable, args.people, config, 1.0 / RESOLUTION, room)
+        {
+            Ok(trips) => trips,
+            Err(e) => {
+                too_small.push(room);
+                why_small.get_or_insert_with(|| format!("room {room}: {e}"));
+                continue;
+            }
+        };
+        densities.push(density(&floor, args.people, args.body_radius));
         let shortest = shortest_lengths(&floor.walkable, &trips)?;
-        let (w, r) = (&floor.walkable, config.body_radius);
-        let t = Instant::now();
-        let run = walk_crowd(w, &trips, model, config)?;
-        let s = t.elapsed().as_secs_f64();
-        learned.add(&run, &shortest, &floor, r, s, &gait)?;
-        let t = Instant::now();
-        let run = walk_crowd(w, &trips, &exact, config)?;
-        let s = t.elapsed().as_secs_f64();
-        fmm.add(&run, &shortest, &floor, r, s, &gait)?;
-        let t = Instant::now();
-        let run = orca_crowd(w, &trips, config, &OrcaConfig::default())?;
-        let s = t.elapsed().as_secs_f64();
-        orca.add(&run, &shortest, &floor, r, s, &gait)?;
-        if !args.json {
-            eprintln!(
-                "room {room}: learned {}/{} exact {}/{} orca {}/{} reached",
-                learned.reached, learned.people, fmm.reached, fmm.people, orca.reached, orca.people
-            );
+        let mut line = format!("room {room}:");
+        for (kind, tally) in loops.iter().zip(&mut tallies) {
+            let (run, seconds) = kind.run(&floor.walkable, &trips, model, config, room)?;
+            tally.add(&run, &shortest, &floor, config, seconds, &gait)?;
+            line.push_str(&format!(" {} {}/{}", kind.name(), tally.reached, tally.people));
         }
+        if !args.json {
+            eprintln!("{line}");
+        }
+    }
+    if densities.is_empty() {
+        bail!(
+            "no room of the {rooms} held {} people: {}",
+            args.people,
+            why_small.unwrap_or_default()
+        );
     }
     let mut out = serde_json::Map::new();
     out.insert("rooms".into(), rooms.into());
+    out.insert("rooms_run".into(), densities.len().into());
+    out.insert("rooms_too_small".into(), too_small.into());
+    if let Some(why) = why_small {
+        out.insert("first_too_small".into(), why.into());
+    }
     out.insert("people".into(), args.people.into());
+    out.insert(
+        "density".into(),
+        (densities.iter().sum::<f64>() / densities.len() as f64).into(),
+    );
     out.insert("body_radius_m".into(), args.body_radius.into());
     out.insert("step_length_m".into(), args.step_length.into());
-    learned.json("", &mut out);
-    fmm.json("exact_", &mut out);
-    orca.json("orca_", &mut out);
+    for (kind, tally) in loops.iter().zip(&tallies) {
+        tally.json(&format!("{}_", kind.name()), &mut out);
+    }
     println!("{}", serde_json::Value::Object(out));
     Ok(())
 }
@@ -200,14 +307,24 @@ fn one_room(args: &Args, model: &FieldNet, config: &CrowdConfig) -> Result<()> {
         args.seed,
     )?;
     let shortest = shortest_lengths(&floor.walkable, &trips)?;
-    let t = Instant::now();
-    let run = walk_crowd(&floor.walkable, &trips, model, config)?;
-    let ms_per_step = 1e3 * t.elapsed().as_secs_f64() / run.steps().max(1) as f64;
-    let exact = walk_crowd(&floor.walkable, &trips, &FastMarching::default(), config)?;
-    let orca = orca_crowd(&floor.walkable, &trips, config, &OrcaConfig::default())?;
+    let gait = walk(&WalkConfig::default(), args.seed)?;
+    // Every loop on the same trips; the first one's people are written out and drawn.
+    let loops = args.loops();
+    let mut figures = serde_json::Map::new();
+    let mut shown = None;
+    for &kind in &loops {
+        let (run, seconds) = kind.run(&floor.walkable, &trips, model, config, args.seed)?;
+        let mut tally = CrowdTally::default();
+        tally.add(&run, &shortest, &floor, config, seconds, &gait)?;
+        tally.json(&format!("{}_", kind.name()), &mut figures);
+        figures.insert(format!("{}_ending", kind.name()), serde_json::to_value(run.ending)?);
+        shown.get_or_insert((kind, run));
+    }
+    let Some((kind, run)) = shown else {
+        bail!("--loops named no loop");
+    };
 
     // Each person's walk, aligned to their path and checked in the scene.
-    let gait = walk(&WalkConfig::default(), args.seed)?;
     let mut people = Vec::new();
     // A time step's seconds at the gait's speed: the motion out plays on the run's clock.
     let step_s = config.step_length * RESOLUTION / (gait.step_length() * gait.fps);
@@ -232,18 +349,17 @@ fn one_room(args: &Args, model: &FieldNet, config: &CrowdConfig) -> Result<()> {
             "pose_valid_pct": 100.0 * valid as f64 / reports.len().max(1) as f64,
         }));
     }
-    let summary = serde_json::json!({
+    let mut summary = serde_json::json!({
         "seed": args.seed,
         "floor_map": [floor.walkable.rows(), floor.walkable.cols()],
+        "people_count": args.people,
+        "density": density(&floor, args.people, args.body_radius),
+        "drawn": kind.name(),
         "people": people,
-        "steps": run.steps(),
-        "ms_per_step": ms_per_step,
-        "person_collisions": run.person_collisions(config.body_radius),
-        "furniture_collisions": run.obstacle_collisions(&floor.walkable),
-        "exact_arrived": exact.arrived_at.iter().flatten().count(),
-        "orca_arrived": orca.arrived_at.iter().flatten().count(),
-        "orca_person_collisions": orca.person_collisions(config.body_radius),
     });
+    for (k, v) in figures {
+        summary[k] = v;
+    }
     envfield::grid::write_atomic(
         args.out.join("crowd.json"),
         serde_json::to_string_pretty(&summary)?.as_bytes(),
@@ -273,7 +389,6 @@ fn one_room(args: &Args, model: &FieldNet, config: &CrowdConfig) -> Result<()> {
         }
         None => Canvas::write_gif(&frames, 100, args.out.join("crowd.gif"))?,
     }
-    let mut summary = summary;
     summary.as_object_mut().map(|o| o.remove("people"));
     summary["out"] = serde_json::json!(args.out);
     println!("{summary}");

@@ -13,10 +13,11 @@ use std::collections::VecDeque;
 /// would bring, written here from the paper.
 ///
 /// The grid: a lattice of `walkable`'s points every body diameter (twice
-/// [`CrowdConfig::body_radius`], rounded to whole cells) from the first row and column, a
-/// vertex where the walkable map is free, 4-connected where the straight step between two
-/// vertices is clear. Each person starts by moving to the free vertex nearest their start (in
-/// frame 1; no two share one) and has arrived when they stand on the vertex nearest their goal.
+/// [`CrowdConfig::body_radius`], rounded to whole cells), a vertex where the walkable map is
+/// free, 4-connected where the straight step between two vertices is clear; of the lattice's
+/// offsets, the one whose largest connected set is largest. Each person starts by moving to the
+/// vertex nearest their start within a straight step (any nearest one if none is; in frame 1;
+/// no two share one) and has arrived when they stand on the vertex chosen so for their goal.
 /// Every time step each person moves to a neighbouring vertex or stays (one step is one body
 /// diameter, whatever `config.step_length`). PIBT's rules: priorities grow by one each step
 /// off the goal and drop to a fixed fraction on it; in priority order, each person takes the
@@ -29,9 +30,23 @@ use std::collections::VecDeque;
 /// people turning a corner one behind the other come closer than a diameter midway.
 ///
 /// # Errors
-/// A bad problem ([`check_trips`]); a problem whose starts or goals the lattice cannot give
-/// distinct vertices, or whose goal vertex its start vertex cannot reach on the lattice
-/// ([`crate::PlanError::Invalid`]).
+/// A bad problem ([`check_trips`]); more people than the lattice has vertices
+/// ([`crate::PlanError::Invalid`]). A person whose goal vertex the lattice does not join to
+/// their start vertex (a door narrower than its spacing) is no error: they cannot arrive.
+///
+/// ```
+/// use envfield_grid::{Cell2, Grid2};
+/// use envfield_plan::crowd::{grid_pibt, CrowdConfig, Ending, Trip};
+///
+/// let floor = Grid2::new(30, 30)?;
+/// let trips = [
+///     Trip { start: Cell2::new(3, 3), goal: Cell2::new(26, 26) },
+///     Trip { start: Cell2::new(26, 26), goal: Cell2::new(3, 3) },
+/// ];
+/// let run = grid_pibt(&floor, &trips, &CrowdConfig::default(), 0)?;
+/// assert_eq!(run.ending, Ending::Arrived);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub fn grid_pibt(
     walkable: &Grid2,
     trips: &[Trip],
@@ -39,21 +54,14 @@ pub fn grid_pibt(
     seed: u64,
 ) -> Result<CrowdRun> {
     check_trips(walkable, trips, config)?;
-    let lattice = Lattice::new(
-        walkable,
-        (2.0 * config.body_radius).round().max(1.0) as usize,
-    );
+    let spacing = (2.0 * config.body_radius).round().max(1.0) as usize;
+    let lattice = (0..spacing * spacing)
+        .map(|k| Lattice::new(walkable, spacing, [k / spacing, k % spacing]))
+        .max_by_key(Lattice::connected)
+        .expect("at least one offset");
     let starts = lattice.snap(trips.iter().map(|t| t.start), "start")?;
     let goals = lattice.snap(trips.iter().map(|t| t.goal), "goal")?;
     let dist: Vec<Vec<u32>> = goals.iter().map(|&g| lattice.distances(g)).collect();
-    for (i, (&s, d)) in starts.iter().zip(&dist).enumerate() {
-        if d[s] == u32::MAX {
-            return Err(crate::PlanError::Invalid(format!(
-                "person {i}'s goal vertex cannot be reached from their start vertex on the \
-                 lattice of one body per cell"
-            )));
-        }
-    }
     let n = trips.len();
     let mut run = CrowdRun::starting(&trips.iter().map(|t| point(t.start)).collect::<Vec<_>>());
     run.stay_on_map = true;
@@ -115,18 +123,20 @@ pub fn grid_pibt(
 struct Lattice<'a> {
     walkable: &'a Grid2,
     spacing: usize,
+    /// The first vertex's cell.
+    offset: [usize; 2],
     rows: usize,
     cols: usize,
     /// Each vertex's neighbours (free, step clear).
     neighbours: Vec<Vec<usize>>,
-    free: Vec<bool>,
-}
+    }
 
 impl<'a> Lattice<'a> {
-    fn new(walkable: &'a Grid2, spacing: usize) -> Self {
-        let rows = (walkable.rows() - 1) / spacing + 1;
-        let cols = (walkable.cols() - 1) / spacing + 1;
-        let cell = |v: usize| Cell2::new(v / cols * spacing, v % cols * spacing);
+    fn new(walkable: &'a Grid2, spacing: usize, offset: [usize; 2]) -> Self {
+        let rows = walkable.rows().saturating_sub(offset[0]).div_ceil(spacing);
+        let cols = walkable.cols().saturating_sub(offset[1]).div_ceil(spacing);
+        let cell =
+            |v: usize| Cell2::new(offset[0] + v / cols * spacing, offset[1] + v % cols * spacing);
         let free: Vec<bool> = (0..rows * cols)
             .map(|v| walkable.is_free(cell(v)))
             .collect();
@@ -151,11 +161,35 @@ impl<'a> Lattice<'a> {
         Self {
             walkable,
             spacing,
+            offset,
             rows,
             cols,
             neighbours,
-            free,
         }
+    }
+
+    /// Vertices in the largest connected set.
+    fn connected(&self) -> usize {
+        let mut seen = vec![false; self.len()];
+        let mut best = 0;
+        for first in 0..self.len() {
+            if seen[first] || self.neighbours[first].is_empty() {
+                continue;
+            }
+            seen[first] = true;
+            let (mut stack, mut size) = (vec![first], 0);
+            while let Some(v) = stack.pop() {
+                size += 1;
+                for &u in &self.neighbours[v] {
+                    if !seen[u] {
+                        seen[u] = true;
+                        stack.push(u);
+                    }
+                }
+            }
+            best = best.max(size);
+        }
+        best
     }
 
     fn len(&self) -> usize {
@@ -164,28 +198,39 @@ impl<'a> Lattice<'a> {
 
     fn point(&self, v: usize) -> Point2 {
         Point2::new(
-            (v / self.cols * self.spacing) as f32,
-            (v % self.cols * self.spacing) as f32,
+            (self.offset[0] + v / self.cols * self.spacing) as f32,
+            (self.offset[1] + v % self.cols * self.spacing) as f32,
         )
     }
 
-    /// Each cell's nearest free vertex, none shared, in the order given.
+    /// Each cell's nearest free vertex within a straight step (or nearest at all), none
+    /// shared, in the order given.
     fn snap(&self, cells: impl Iterator<Item = Cell2>, what: &str) -> Result<Vec<usize>> {
         let mut used = vec![false; self.len()];
         let mut out = Vec::new();
         for (i, c) in cells.enumerate() {
             let p = point(c);
-            let best = (0..self.len())
-                .filter(|&v| self.free[v] && !used[v] && !self.neighbours[v].is_empty())
-                .filter(|&v| segment_clear(self.walkable, p, self.point(v)))
-                .min_by(|&a, &b| {
+            let open: Vec<usize> = (0..self.len())
+                .filter(|&v| !used[v] && !self.neighbours[v].is_empty())
+                .collect();
+            let nearest = |vs: &mut dyn Iterator<Item = usize>| {
+                vs.min_by(|&a, &b| {
                     p.distance(self.point(a))
                         .total_cmp(&p.distance(self.point(b)))
                 })
+            };
+            let straight = nearest(
+                &mut open
+                    .iter()
+                    .copied()
+                    .filter(|&v| segment_clear(self.walkable, p, self.point(v))),
+            );
+            let best = straight
+                .or_else(|| nearest(&mut open.iter().copied()))
                 .ok_or_else(|| {
                     crate::PlanError::Invalid(format!(
-                        "person {i}'s {what} has no free vertex of the lattice of one body per \
-                         cell within a straight step"
+                        "person {i}'s {what}: no free vertex left on the lattice of one body \
+                         per cell"
                     ))
                 })?;
             used[best] = true;

@@ -5,11 +5,14 @@ use super::geometry::{candidates, closest_approach, mark_discs, point, predict_w
 use super::geometry::{segment_clear, value_at};
 use super::{check_trips, CrowdConfig, CrowdRun, Ending, Trip};
 use crate::Result;
-use envfield_grid::{Cell2, Field2, FieldModel, Grid2, Point2};
+use envfield_grid::{Cell2, Field2, FieldModel, Grid2, Point2, SplitMix64};
 
-/// Calls of the recursive choice per person and time step after which a person who failed
-/// to make way is not asked again (plain PIBT asks once).
+/// Calls of the recursive choice per person and time step after which nobody else is asked
+/// to move in that step (plain PIBT asks each person once).
 const TRIES_PER_PERSON: usize = 64;
+
+/// People one candidate step may push at once.
+const MAX_PUSHED: usize = 1;
 
 /// Several people by priority inheritance with backtracking (PIBT, Okumura et al. 2019/2022)
 /// over continuous steps, guided by `model`'s fields, until everyone stands on their goal at
@@ -91,6 +94,8 @@ pub struct PibtCrowd<'a, M> {
     statics: Vec<Field2>,
     /// Time steps since each person last stood on their goal, plus a tie-breaking fraction.
     priority: Vec<f32>,
+    /// Time steps each person off their goal has stood still.
+    still: Vec<usize>,
     run: CrowdRun,
 }
 
@@ -102,8 +107,10 @@ struct Choice<'f> {
     fields: Vec<Option<&'f Field2>>,
     /// Calls of [`PibtCrowd::choose`] so far this step.
     tries: usize,
-    /// Calls after which a person who failed to make way stays put for the step.
+    /// Calls after which nobody else is asked to move this step.
     budget: usize,
+    /// Who has chosen, in order (what a failed call undoes).
+    chosen: Vec<usize>,
 }
 
 impl<'a, M: FieldModel> PibtCrowd<'a, M> {
@@ -131,6 +138,7 @@ impl<'a, M: FieldModel> PibtCrowd<'a, M> {
             model,
             config: *config,
             goal_cells: trips.iter().map(|t| t.goal).collect(),
+            still: vec![0; n],
             priority: (0..n).map(|i| (i as f32 + 0.5) / n as f32).collect(),
             goals,
             pos,
@@ -171,6 +179,7 @@ impl<'a, M: FieldModel> PibtCrowd<'a, M> {
             fields: vec![None; n],
             tries: 0,
             budget: TRIES_PER_PERSON * n,
+            chosen: Vec::new(),
         };
         for (&i, field) in off.iter().zip(&changed) {
             choice.fields[i] = field
@@ -181,6 +190,7 @@ impl<'a, M: FieldModel> PibtCrowd<'a, M> {
         order.sort_by(|&a, &b| self.priority[b].total_cmp(&self.priority[a]));
         for &i in &order {
             if choice.next[i].is_none() && !self.choose(i, &mut choice) {
+                choice.next[i] = Some(self.pos[i]);
                 self.run.waits += 1;
             }
         }
@@ -196,6 +206,10 @@ impl<'a, M: FieldModel> PibtCrowd<'a, M> {
         for i in 0..n {
             let end = choice.next[i].unwrap_or(self.pos[i]);
             let was_home = self.pos[i] == self.goals[i];
+            self.still[i] = match end == self.pos[i] && !was_home {
+                true => self.still[i] + 1,
+                false => 0,
+            };
             self.pos[i] = end;
             let home = end == self.goals[i];
             if home {
@@ -228,9 +242,14 @@ impl<'a, M: FieldModel> PibtCrowd<'a, M> {
     }
 
     /// Step 3 for person `i` (PIBT's recursive call): takes the first candidate, in `i`'s
-    /// order, that is clear of the map and of every chosen step and whose one unchosen
-    /// neighbour (if any) can make way. Returns `false`, with `i` standing, when none can.
+    /// order, that is clear of the map and of every chosen step and whose unchosen neighbours
+    /// (at most [`MAX_PUSHED`]) can all make way. When none can, or the step's budget of calls
+    /// is spent, returns `false` with every choice made under this call undone: `i` and
+    /// everyone they pushed stand where they are, unchosen, and may be asked again.
     fn choose(&mut self, i: usize, choice: &mut Choice<'_>) -> bool {
+        if choice.tries >= choice.budget {
+            return false;
+        }
         choice.tries += 1;
         let disc = 2.0 * self.config.body_radius;
         let from = self.pos[i];
@@ -246,34 +265,31 @@ impl<'a, M: FieldModel> PibtCrowd<'a, M> {
             if !clear_of_chosen {
                 continue;
             }
-            let mut in_the_way = (0..self.pos.len()).filter(|&k| {
-                k != i
-                    && choice.next[k].is_none()
-                    && closest_approach(from, to, self.pos[k], self.pos[k]) < disc
-            });
-            let (first, second) = (in_the_way.next(), in_the_way.next());
-            if second.is_some() {
-                // More than one person to move: a pushed person's failure must leave nobody
-                // moved, which holds only with one.
+            let in_the_way: Vec<usize> = (0..self.pos.len())
+                .filter(|&k| {
+                    k != i
+                        && choice.next[k].is_none()
+                        && closest_approach(from, to, self.pos[k], self.pos[k]) < disc
+                })
+                .collect();
+            if in_the_way.len() > MAX_PUSHED {
                 continue;
             }
+            let mark = choice.chosen.len();
             choice.next[i] = Some(to);
-            match first {
-                None => return true,
-                Some(k) => {
-                    if self.choose(k, choice) {
-                        return true;
-                    }
-                    // k could not make way for this candidate. While the step's budget of
-                    // tries lasts, k may be asked again for the next one (a failed call
-                    // leaves nobody moved); after it, k stands, as in PIBT.
-                    if choice.tries < choice.budget {
-                        choice.next[k] = None;
-                    }
-                }
+            choice.chosen.push(i);
+            // Someone pushed earlier in this loop may have pushed the next one already, with
+            // this step in place: then they are out of the way.
+            let made_way = in_the_way
+                .iter()
+                .all(|&k| choice.next[k].is_some() || self.choose(k, choice));
+            if made_way {
+                return true;
+            }
+            for k in choice.chosen.drain(mark..) {
+                choice.next[k] = None;
             }
         }
-        choice.next[i] = Some(from);
         false
     }
 
@@ -312,9 +328,16 @@ impl<'a, M: FieldModel> PibtCrowd<'a, M> {
             let through = at(statics, p) + push;
             changed.map_or(through, |f| at(f, p).min(through))
         };
+        // Someone who has stood still for two steps or more tries their candidates in a
+        // shuffled order within a step's worth of rank: the same choices would repeat.
+        let mut rng = SplitMix64::new(((self.run.steps() as u64) << 20) ^ i as u64 ^ 0x5EED);
+        let shake = match self.still[i] >= 1 {
+            true => self.config.step_length,
+            false => 0.0,
+        };
         let mut keyed: Vec<(Point2, f32, f32)> = ends
             .into_iter()
-            .map(|p| (p, rank(p), at(statics, p)))
+            .map(|p| (p, rank(p) + shake * rng.next_f32(), at(statics, p)))
             .filter(|&(_, _, empty)| empty.is_finite())
             .collect();
         keyed.sort_by(|a, b| a.1.total_cmp(&b.1).then(a.2.total_cmp(&b.2)));

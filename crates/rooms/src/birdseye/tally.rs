@@ -3,12 +3,13 @@
 use super::Floor;
 use crate::Result;
 use envfield_affordance::PoseSequence;
-use envfield_plan::crowd::CrowdRun;
+use envfield_plan::crowd::{CrowdConfig, CrowdRun};
 use serde_json::{Map, Value};
 
 /// One loop's figures summed over rooms: reach, collisions counted from the recorded motion,
-/// path ratios over each person's own shortest path, time per step, and the share of aligned
-/// walking poses that are supported and collision-free.
+/// path ratios over each person's own shortest path, sum of costs and makespan over their
+/// lower bounds, time per step, and the share of aligned walking poses that are supported and
+/// collision-free.
 #[derive(Clone, Debug, Default)]
 pub struct CrowdTally {
     /// People who set out.
@@ -27,6 +28,18 @@ pub struct CrowdTally {
     pub seconds: f64,
     /// Times someone waited for the way to clear.
     pub waits: usize,
+    /// Runs added.
+    pub runs: usize,
+    /// Runs in which everyone arrived.
+    pub solved: usize,
+    /// Over solved runs: the time steps at which each person arrived, summed (the sum of
+    /// costs).
+    pub cost: usize,
+    /// Over solved runs: each person's lower bound, their own shortest path in whole steps,
+    /// summed.
+    pub cost_bound: usize,
+    /// Over solved runs: the last arrival over the longest lower bound, per run.
+    pub makespan_ratios: Vec<f32>,
     /// Aligned walking poses checked.
     pub pose_frames: usize,
     /// Of those, supported and collision-free.
@@ -34,9 +47,10 @@ pub struct CrowdTally {
 }
 
 impl CrowdTally {
-    /// Adds one run on `floor`: `shortest` is each person's shortest path (cells), `radius`
-    /// the body radius (cells), `seconds` the run's time; each person's `gait` is aligned to
-    /// their path and checked.
+    /// Adds one run on `floor` under `config` (cells): `shortest` is each person's shortest
+    /// path (cells), `seconds` the run's time; each person's `gait` is aligned to their path
+    /// and checked. A person's lower bound is their shortest path in steps of
+    /// `config.step_length`, rounded up.
     ///
     /// # Errors
     /// Errors of the alignment and the checks.
@@ -45,7 +59,7 @@ impl CrowdTally {
         run: &CrowdRun,
         shortest: &[f32],
         floor: &Floor,
-        radius: f32,
+        config: &CrowdConfig,
         seconds: f64,
         gait: &PoseSequence,
     ) -> Result<()> {
@@ -56,11 +70,26 @@ impl CrowdTally {
         }
         self.people += run.people();
         self.reached += run.arrived_at.iter().flatten().count();
-        self.person_collisions += run.person_collisions(radius);
+        self.person_collisions += run.person_collisions(config.body_radius);
         self.furniture_collisions += run.obstacle_collisions(&floor.walkable);
         for (i, arrived) in run.arrived_at.iter().enumerate() {
             if arrived.is_some() && shortest[i] > 0.0 {
                 self.ratios.push(run.path_length(i) / shortest[i]);
+            }
+        }
+        self.runs += 1;
+        if run.all_arrived() {
+            let bounds: Vec<usize> = shortest
+                .iter()
+                .map(|&s| ((s / config.step_length).ceil() as usize).max(1))
+                .collect();
+            let arrivals: Vec<usize> = run.arrived_at.iter().flatten().copied().collect();
+            self.solved += 1;
+            self.cost += arrivals.iter().sum::<usize>();
+            self.cost_bound += bounds.iter().sum::<usize>();
+            let (last, bound) = (arrivals.iter().max(), bounds.iter().max());
+            if let (Some(&last), Some(&bound)) = (last, bound) {
+                self.makespan_ratios.push(last as f32 / bound as f32);
             }
         }
         self.steps += run.steps();
@@ -72,7 +101,8 @@ impl CrowdTally {
     /// The figures as JSON keys into `out`, each name after `prefix`: `reach_pct`,
     /// `person_collisions`, `furniture_collisions`, `path_ratio` (null for no arrival),
     /// `ms_per_step` (null for no step), `pose_valid_pct` (null for no pose), `steps`,
-    /// `waits`.
+    /// `waits`, `solved_pct` (runs in which everyone arrived), `sum_of_costs_ratio` and
+    /// `makespan_ratio` (over solved runs; null for none).
     pub fn json(&self, prefix: &str, out: &mut Map<String, Value>) {
         let ratio = (!self.ratios.is_empty())
             .then(|| self.ratios.iter().sum::<f32>() / self.ratios.len() as f32);
@@ -100,5 +130,19 @@ impl CrowdTally {
         );
         put("steps", self.steps.into());
         put("waits", self.waits.into());
+        put(
+            "solved_pct",
+            (100.0 * self.solved as f64 / self.runs.max(1) as f64).into(),
+        );
+        put(
+            "sum_of_costs_ratio",
+            (self.cost_bound > 0)
+                .then(|| self.cost as f64 / self.cost_bound as f64)
+                .into(),
+        );
+        let makespan = (!self.makespan_ratios.is_empty()).then(|| {
+            self.makespan_ratios.iter().sum::<f32>() / self.makespan_ratios.len() as f32
+        });
+        put("makespan_ratio", makespan.into());
     }
 }
