@@ -24,12 +24,12 @@ use anyhow::{bail, Context, Result};
 use clap::Parser;
 use envfield::affordance::{walk, Actor, WalkConfig};
 use envfield::eikonal::FastMarching;
+use envfield::grid::Grid2;
 use envfield::grid::{Canvas, Point2};
 use envfield::nets::FieldNet;
-use envfield::grid::Grid2;
 use envfield::plan::crowd::{
-    grid_pibt, orca_crowd, pibt_crowd, random_trips, shortest_lengths, walk_crowd, CrowdConfig,
-    CrowdRun, OrcaConfig, Trip,
+    grid_pibt, lacam_crowd, orca_crowd, pibt_crowd, plan_crowd, random_trips, shortest_lengths,
+    walk_crowd, CrowdConfig, CrowdRun, OrcaConfig, Trip,
 };
 use envfield::rooms::birdseye::{crowd_frames, CrowdTally, Floor, RESOLUTION};
 use envfield::scene::RoomConfig;
@@ -55,8 +55,8 @@ struct Args {
     /// Print only the figures, as one JSON object.
     #[arg(long)]
     json: bool,
-    /// The loops to run, comma-separated (all by default; the first is the one drawn and
-    /// written out for one room).
+    /// The loops to run, comma-separated (by default ours, ours_exact, pibt, alg1,
+    /// alg1_exact, orca, grid_pibt; the first is the one drawn and written out for one room).
     #[arg(long, value_enum, value_delimiter = ',')]
     loops: Vec<Loop>,
     /// The bird's-eye field.
@@ -99,7 +99,7 @@ impl Args {
             }
         }
         match loops.is_empty() {
-            true => Loop::ALL.to_vec(),
+            true => Loop::DEFAULT.to_vec(),
             false => loops,
         }
     }
@@ -165,10 +165,19 @@ fn main() -> Result<()> {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 #[value(rename_all = "snake_case")]
 enum Loop {
-    /// PIBT over the shipped bird's-eye field's steps (`pibt_crowd`).
+    /// Ours (`plan_crowd`): PIBT over the shipped bird's-eye field's steps, and the LaCAM
+    /// search where PIBT leaves someone short.
     Ours,
     /// The same on the exact field (fast marching).
     OursExact,
+    /// PIBT over the shipped field's steps alone (`pibt_crowd`).
+    Pibt,
+    /// The same on the exact field.
+    PibtExact,
+    /// The LaCAM search alone (`lacam_crowd`) on the shipped field.
+    Lacam,
+    /// The same on the exact field.
+    LacamExact,
     /// The paper's Algorithm 1 on the shipped field (`walk_crowd`).
     Alg1,
     /// Algorithm 1 on the exact field.
@@ -180,9 +189,11 @@ enum Loop {
 }
 
 impl Loop {
-    const ALL: [Loop; 6] = [
+    /// The loops run when `--loops` names none.
+    const DEFAULT: [Loop; 7] = [
         Loop::Ours,
         Loop::OursExact,
+        Loop::Pibt,
         Loop::Alg1,
         Loop::Alg1Exact,
         Loop::Orca,
@@ -194,10 +205,14 @@ impl Loop {
         match self {
             Loop::Ours => "ours",
             Loop::OursExact => "ours_exact",
+            Loop::Pibt => "pibt",
+            Loop::PibtExact => "pibt_exact",
             Loop::Alg1 => "alg1",
             Loop::Alg1Exact => "alg1_exact",
             Loop::Orca => "orca",
             Loop::GridPibt => "grid_pibt",
+            Loop::Lacam => "lacam",
+            Loop::LacamExact => "lacam_exact",
         }
     }
 
@@ -213,12 +228,16 @@ impl Loop {
         let exact = FastMarching::default();
         let t = Instant::now();
         let run = match self {
-            Loop::Ours => pibt_crowd(walkable, trips, model, config)?,
-            Loop::OursExact => pibt_crowd(walkable, trips, &exact, config)?,
+            Loop::Ours => plan_crowd(walkable, trips, model, config)?,
+            Loop::OursExact => plan_crowd(walkable, trips, &exact, config)?,
+            Loop::Pibt => pibt_crowd(walkable, trips, model, config)?,
+            Loop::PibtExact => pibt_crowd(walkable, trips, &exact, config)?,
             Loop::Alg1 => walk_crowd(walkable, trips, model, config)?,
             Loop::Alg1Exact => walk_crowd(walkable, trips, &exact, config)?,
             Loop::Orca => orca_crowd(walkable, trips, config, &OrcaConfig::default())?,
             Loop::GridPibt => grid_pibt(walkable, trips, config, seed)?,
+            Loop::Lacam => lacam_crowd(walkable, trips, model, config)?,
+            Loop::LacamExact => lacam_crowd(walkable, trips, &exact, config)?,
         };
         Ok((run, t.elapsed().as_secs_f64()))
     }
@@ -255,7 +274,12 @@ fn batch(args: &Args, rooms: usize, model: &FieldNet, config: &CrowdConfig) -> R
         for (kind, tally) in loops.iter().zip(&mut tallies) {
             let (run, seconds) = kind.run(&floor.walkable, &trips, model, config, room)?;
             tally.add(&run, &shortest, &floor, config, seconds, &gait)?;
-            line.push_str(&format!(" {} {}/{}", kind.name(), tally.reached, tally.people));
+            line.push_str(&format!(
+                " {} {}/{}",
+                kind.name(),
+                tally.reached,
+                tally.people
+            ));
         }
         if !args.json {
             eprintln!("{line}");
@@ -317,7 +341,10 @@ fn one_room(args: &Args, model: &FieldNet, config: &CrowdConfig) -> Result<()> {
         let mut tally = CrowdTally::default();
         tally.add(&run, &shortest, &floor, config, seconds, &gait)?;
         tally.json(&format!("{}_", kind.name()), &mut figures);
-        figures.insert(format!("{}_ending", kind.name()), serde_json::to_value(run.ending)?);
+        figures.insert(
+            format!("{}_ending", kind.name()),
+            serde_json::to_value(run.ending)?,
+        );
         shown.get_or_insert((kind, run));
     }
     let Some((kind, run)) = shown else {

@@ -4,8 +4,8 @@
 use envfield_eikonal::FastMarching;
 use envfield_grid::{Cell2, Grid2, Point2};
 use envfield_plan::crowd::{
-    check_trips, closest_approach, grid_pibt, orca_crowd, pibt_crowd, shortest_lengths, walk_crowd,
-    CrowdConfig, CrowdRun, Ending, OrcaConfig, Trip,
+    check_trips, closest_approach, grid_pibt, lacam_crowd, orca_crowd, pibt_crowd, plan_crowd,
+    shortest_lengths, walk_crowd, CrowdConfig, CrowdRun, Ending, OrcaConfig, Trip,
 };
 
 mod doorway;
@@ -258,5 +258,48 @@ fn grid_pibt_swaps_the_rooms_on_its_lattice() {
     // One body per 5-cell vertex: every frame's people stand a diameter apart or more.
     for frame in &run.frames[1..] {
         assert!(frame[0].distance(frame[1]) >= 5.0 - 1e-3);
+    }
+}
+
+/// Two rooms joined by a corridor one body wide and 5 long (the walkable map's one free row).
+fn corridor() -> Grid2 {
+    let mut obstacles = vec![false; 30 * 41];
+    for row in 0..30 {
+        for col in 18..23 {
+            obstacles[row * 41 + col] = row != 15;
+        }
+    }
+    Grid2::from_obstacles(30, 41, obstacles).unwrap()
+}
+
+#[test]
+fn the_search_swaps_two_people_through_a_corridor_where_pibt_alone_stalls() {
+    let grid = corridor();
+    let config = CrowdConfig::default();
+    let trips = [
+        Trip {
+            start: Cell2::new(15, 5),
+            goal: Cell2::new(15, 35),
+        },
+        Trip {
+            start: Cell2::new(15, 35),
+            goal: Cell2::new(15, 5),
+        },
+    ];
+    let walked = pibt_crowd(&grid, &trips, &FastMarching::default(), &config).unwrap();
+    let planned = plan_crowd(&grid, &trips, &FastMarching::default(), &config).unwrap();
+    let searched = lacam_crowd(&grid, &trips, &FastMarching::default(), &config).unwrap();
+    // PIBT alone: the one pushed back into the corridor cannot step aside in time.
+    assert_eq!(walked.ending, Ending::StepBudget);
+    for run in [&planned, &searched] {
+        check_doorway(run, &grid, &config, "through the corridor");
+        assert_eq!(run.ending, Ending::Arrived);
+        // Every step within the step length.
+        for t in 0..run.steps() {
+            for i in 0..2 {
+                let d = run.frames[t][i].distance(run.frames[t + 1][i]);
+                assert!(d <= config.step_length + 1e-4, "step of {d} cells");
+            }
+        }
     }
 }

@@ -129,14 +129,18 @@ struct Lattice<'a> {
     cols: usize,
     /// Each vertex's neighbours (free, step clear).
     neighbours: Vec<Vec<usize>>,
-    }
+}
 
 impl<'a> Lattice<'a> {
     fn new(walkable: &'a Grid2, spacing: usize, offset: [usize; 2]) -> Self {
         let rows = walkable.rows().saturating_sub(offset[0]).div_ceil(spacing);
         let cols = walkable.cols().saturating_sub(offset[1]).div_ceil(spacing);
-        let cell =
-            |v: usize| Cell2::new(offset[0] + v / cols * spacing, offset[1] + v % cols * spacing);
+        let cell = |v: usize| {
+            Cell2::new(
+                offset[0] + v / cols * spacing,
+                offset[1] + v % cols * spacing,
+            )
+        };
         let free: Vec<bool> = (0..rows * cols)
             .map(|v| walkable.is_free(cell(v)))
             .collect();

@@ -24,18 +24,11 @@ const MAX_PUSHED: usize = 1;
 /// use envfield_grid::{Cell2, Grid2};
 /// use envfield_plan::crowd::{pibt_crowd, CrowdConfig, Ending, Trip};
 ///
-/// // A corridor one body wide joins two rooms; two people swap rooms through it.
-/// let mut obstacles = vec![false; 30 * 41];
-/// for row in 0..30 {
-///     for col in 18..23 {
-///         obstacles[row * 41 + col] = row != 15;
-///     }
-/// }
-/// let floor = Grid2::from_obstacles(30, 41, obstacles)?;
-/// let trips = [
-///     Trip { start: Cell2::new(15, 5), goal: Cell2::new(15, 35) },
-///     Trip { start: Cell2::new(15, 35), goal: Cell2::new(15, 5) },
-/// ];
+/// // An empty 30x30 floor (centre space, 0.1 m cells): four people cross to the far corners.
+/// let floor = Grid2::new(30, 30)?;
+/// let corners = [Cell2::new(3, 3), Cell2::new(3, 26), Cell2::new(26, 26), Cell2::new(26, 3)];
+/// let trips: Vec<Trip> =
+///     (0..4).map(|k| Trip { start: corners[k], goal: corners[(k + 2) % 4] }).collect();
 /// let config = CrowdConfig::default();
 /// let run = pibt_crowd(&floor, &trips, &FastMarching::default(), &config)?;
 /// assert_eq!(run.ending, Ending::Arrived);

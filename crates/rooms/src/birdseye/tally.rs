@@ -140,9 +140,8 @@ impl CrowdTally {
                 .then(|| self.cost as f64 / self.cost_bound as f64)
                 .into(),
         );
-        let makespan = (!self.makespan_ratios.is_empty()).then(|| {
-            self.makespan_ratios.iter().sum::<f32>() / self.makespan_ratios.len() as f32
-        });
+        let makespan = (!self.makespan_ratios.is_empty())
+            .then(|| self.makespan_ratios.iter().sum::<f32>() / self.makespan_ratios.len() as f32);
         put("makespan_ratio", makespan.into());
     }
 }
