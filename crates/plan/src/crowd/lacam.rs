@@ -15,6 +15,10 @@ pub const STALL: usize = 40;
 /// Configurations [`lacam_crowd`] may open before it gives up.
 pub const MAX_NODES: usize = 100_000;
 
+/// Successors [`lacam_crowd`] may try (one PIBT step each, new configurations or not) before
+/// it gives up: the bound on its time and memory when it keeps coming back to known ones.
+pub const MAX_TRIES: usize = 1_000_000;
+
 /// Several people planned together: a depth-first search over configurations (everyone's
 /// position) in the manner of LaCAM (Okumura, "LaCAM: Search-Based Algorithm for Quick
 /// Multi-Agent Pathfinding", AAAI 2023), each successor one time step of priority inheritance
@@ -28,7 +32,7 @@ pub const MAX_NODES: usize = 100_000;
 /// it and one cell, the goal within a step, standing still; swept steps clear of the map and,
 /// in continuous time, of each other), ordered by each person's field on the empty map from
 /// `model` (one batched prediction). The search ends at the first configuration with everyone
-/// on their goal, or after [`MAX_NODES`] configurations; then the run is the path to the
+/// on their goal, or after [`MAX_NODES`] configurations or [`MAX_TRIES`] successors; then the run is the path to the
 /// configuration seen with the most people on their goals (`Ending::StepBudget`). A plan
 /// longer than `config.max_steps` is cut there.
 ///
@@ -83,15 +87,16 @@ pub fn lacam_crowd(
     let mut seen: HashMap<Vec<u32>, usize> = HashMap::from([(key(&nodes[0].config), 0)]);
     let mut open = vec![0usize];
     let mut rng = SplitMix64::new(0x1A_CA3);
-    let mut found = None;
+    let (mut found, mut tries) = (None, 0);
     while let Some(&top) = open.last() {
         if nodes[top].home == n {
             found = Some(top);
             break;
         }
-        if nodes.len() >= MAX_NODES {
+        if nodes.len() >= MAX_NODES || tries >= MAX_TRIES {
             break;
         }
+        tries += 1;
         let Some(link) = nodes[top].tree.pop_front() else {
             open.pop();
             continue;

@@ -34,7 +34,7 @@ mod trips;
 
 pub use geometry::{closest_approach, mark_discs};
 pub use grid_pibt::grid_pibt;
-pub use lacam::{lacam_crowd, plan_crowd, MAX_NODES, STALL};
+pub use lacam::{lacam_crowd, plan_crowd, MAX_NODES, MAX_TRIES, STALL};
 pub use orca::{orca_crowd, OrcaConfig, OrcaCrowd};
 pub use pibt::{pibt_crowd, PibtCrowd};
 pub use run::{CrowdRun, Ending};

@@ -106,6 +106,24 @@ struct Choice<'f> {
     chosen: Vec<usize>,
 }
 
+// By hand: a derive would ask `M: Clone`, and only the reference is cloned.
+impl<M> Clone for PibtCrowd<'_, M> {
+    fn clone(&self) -> Self {
+        Self {
+            walkable: self.walkable,
+            model: self.model,
+            config: self.config,
+            goal_cells: self.goal_cells.clone(),
+            goals: self.goals.clone(),
+            pos: self.pos.clone(),
+            statics: self.statics.clone(),
+            priority: self.priority.clone(),
+            still: self.still.clone(),
+            run: self.run.clone(),
+        }
+    }
+}
+
 impl<'a, M: FieldModel> PibtCrowd<'a, M> {
     /// Everyone at their start, with each person's field on the empty map (one batched
     /// prediction).
