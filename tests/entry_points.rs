@@ -236,6 +236,105 @@ fn birdseye_multi_refuses_impossible_crowds_and_bad_rooms() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// Issue 53: a batch goes on past a room too small for its crowd, counting it apart; one room
+/// read from a file reports every loop's figures; every run says why it ended.
+#[test]
+fn birdseye_multi_counts_small_rooms_apart_and_reports_each_loop() {
+    let Some(bin) = example("birdseye_multi") else {
+        return;
+    };
+    let dir = scratch("birdseye-batch");
+    let out = dir.to_string_lossy().into_owned();
+    let model = concat!(env!("CARGO_MANIFEST_DIR"), "/models/birdseye.safetensors");
+    // Room 61 cannot hold 16 people with separate starts and goals; 62 can.
+    let batch = run(
+        &bin,
+        &[
+            "--model",
+            model,
+            "--out",
+            &out,
+            "--rooms",
+            "2",
+            "--people",
+            "16",
+            "--seed",
+            "61",
+            "--json",
+            "--loops",
+            "pibt_exact,grid_pibt",
+        ],
+    );
+    assert!(
+        batch.status.success(),
+        "{}",
+        String::from_utf8_lossy(&batch.stderr)
+    );
+    let text = String::from_utf8_lossy(&batch.stdout);
+    let figures: serde_json::Value = serde_json::from_str(text.lines().last().unwrap()).unwrap();
+    assert_eq!(figures["rooms_too_small"], serde_json::json!([61]));
+    assert_eq!(figures["rooms_run"], 1);
+    for key in [
+        "pibt_exact_reach_pct",
+        "grid_pibt_reach_pct",
+        "pibt_exact_sum_of_costs_ratio",
+    ] {
+        assert!(figures.get(key).is_some(), "{key} missing: {figures}");
+    }
+    // Every room too small: refused, naming why.
+    refuses(
+        run(
+            &bin,
+            &[
+                "--model", model, "--out", &out, "--rooms", "1", "--people", "16", "--seed",
+                "61", "--json",
+            ],
+        ),
+        "no room of the 1 held 16 people",
+    );
+    // One room read from a file: each loop's figures and ending.
+    let obj = "v 0 0 0\nv 4 0 0\nv 4 3 0\nv 0 3 0\nf 1 2 3\nf 1 3 4\n";
+    let scene = write(&dir, "floor.obj", obj);
+    let one = run(
+        &bin,
+        &[
+            "--model",
+            model,
+            "--out",
+            &out,
+            "--scene",
+            &scene,
+            "--people",
+            "6",
+            "--json",
+            "--loops",
+            "ours_exact,alg1_exact,orca",
+        ],
+    );
+    assert!(
+        one.status.success(),
+        "{}",
+        String::from_utf8_lossy(&one.stderr)
+    );
+    let text = String::from_utf8_lossy(&one.stdout);
+    let figures: serde_json::Value = serde_json::from_str(text.lines().last().unwrap()).unwrap();
+    for name in ["ours_exact", "alg1_exact", "orca"] {
+        for what in [
+            "reach_pct",
+            "person_collisions",
+            "furniture_collisions",
+            "ms_per_step",
+        ] {
+            let key = format!("{name}_{what}");
+            assert!(figures.get(&key).is_some(), "{key} missing: {figures}");
+        }
+        let ending = &figures[format!("{name}_ending")];
+        assert!(ending == "arrived" || ending == "step_budget", "{ending}");
+    }
+    assert_eq!(figures["ours_exact_person_collisions"], 0);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// Issue 36, cases 1, 2, 13-16 and 18: the room and crowd trainers write no untrained weights
 /// over a user's file, refuse counts that would abort or hang, and say when there is nothing
 /// to resume.
