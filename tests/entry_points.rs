@@ -286,8 +286,8 @@ fn birdseye_multi_counts_small_rooms_apart_and_reports_each_loop() {
         run(
             &bin,
             &[
-                "--model", model, "--out", &out, "--rooms", "1", "--people", "16", "--seed",
-                "61", "--json",
+                "--model", model, "--out", &out, "--rooms", "1", "--people", "16", "--seed", "61",
+                "--json",
             ],
         ),
         "no room of the 1 held 16 people",

@@ -7,6 +7,7 @@ use crate::Result;
 use envfield_grid::{Field2, FieldModel, Grid2, Point2, SplitMix64};
 use std::cell::RefCell;
 use std::collections::{HashMap, VecDeque};
+use std::rc::Rc;
 
 /// Time steps without one more person on their goal after which [`plan_crowd`] stops
 /// walking PIBT and searches.
@@ -309,6 +310,9 @@ impl Node {
     }
 }
 
+/// A person and the cell they stand on (its coordinates' bits).
+type EndsKey = (usize, u32, u32);
+
 /// The map, the people's goals and fields: what a step needs.
 struct Space<'a> {
     walkable: &'a Grid2,
@@ -316,19 +320,19 @@ struct Space<'a> {
     goals: Vec<Point2>,
     statics: &'a [Field2],
     /// Each person's ordered ends from each cell they have stood on.
-    ends: RefCell<HashMap<(usize, u32, u32), std::rc::Rc<[Point2]>>>,
+    ends: RefCell<HashMap<EndsKey, Rc<[Point2]>>>,
 }
 
 impl Space<'_> {
     /// Person `i`'s candidate ends from `at`, best first by their field on the empty map
     /// (standing still among them); ends off the field or through furniture dropped. Worked
     /// out once per person and cell.
-    fn ends(&self, i: usize, at: Point2) -> std::rc::Rc<[Point2]> {
+    fn ends(&self, i: usize, at: Point2) -> Rc<[Point2]> {
         let key = (i, at.row.to_bits(), at.col.to_bits());
         if let Some(ends) = self.ends.borrow().get(&key) {
             return ends.clone();
         }
-        let ends: std::rc::Rc<[Point2]> = self.work_out_ends(i, at).into();
+        let ends: Rc<[Point2]> = self.work_out_ends(i, at).into();
         self.ends.borrow_mut().insert(key, ends.clone());
         ends
     }
