@@ -164,7 +164,7 @@ pub fn lacam_crowd(
     Ok(run)
 }
 
-/// Our crowd planner: PIBT over the fields' steps as people walk ([`pibt_crowd`]), and
+/// Our crowd planner: PIBT over the fields' steps as people walk ([`pibt_crowd`](super::pibt_crowd)), and
 /// where that stalls (no more people on their goals for [`STALL`] steps) or runs out of
 /// steps, the LaCAM search ([`lacam_crowd`]) from the starts; whichever brings more people
 /// home (PIBT on a tie).
