@@ -29,6 +29,9 @@ use envfield_scene::{Scene, SignedDistance};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+/// The largest [`FilterConfig::torso_radius`] accepted, metres.
+pub const MAX_TORSO_RADIUS: f32 = 0.5;
+
 /// How torso samples are filtered (the module's rules).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FilterConfig {
@@ -70,13 +73,12 @@ impl FilterConfig {
         }
     }
 
-    /// Checks every field.
+    /// Checks every field: the torso's radius at most [`MAX_TORSO_RADIUS`].
     ///
     /// # Errors
     /// [`AffordanceError::InvalidInput`] naming the settings that cannot work.
     pub fn validate(&self) -> Result<()> {
-        let ok = self.torso_radius.is_finite()
-            && self.torso_radius >= 0.0
+        let ok = (0.0..=MAX_TORSO_RADIUS).contains(&self.torso_radius)
             && (1..=360).contains(&self.yaws)
             && self.settle.is_finite()
             && (0.0..=2.0).contains(&self.settle);
@@ -84,8 +86,9 @@ impl FilterConfig {
             Ok(())
         } else {
             Err(AffordanceError::InvalidInput(format!(
-                "torso filter: torso_radius >= 0, 1 to 360 yaws and a settle of 0 to 2 m (got \
-                 {self:?})"
+                "torso filter: a torso_radius of 0 to {MAX_TORSO_RADIUS} m (the torso's \
+                 clearance from the scene, 0.05 by default), 1 to 360 yaws and a settle of 0 to \
+                 2 m (got {self:?})"
             )))
         }
     }

@@ -46,7 +46,7 @@ pub use check::{
     AffordanceReport,
 };
 pub use error::{AffordanceError, Result};
-pub use filter::{afford, afford_all, plausible, Afford, FilterConfig};
+pub use filter::{afford, afford_all, plausible, Afford, FilterConfig, MAX_TORSO_RADIUS};
 pub use gltf_out::{glb_bytes, write_glb, Actor};
 pub use motion::{
     get_up, lie_down, sit_down, standing_pose, walk, LieConfig, SitConfig, WalkConfig,

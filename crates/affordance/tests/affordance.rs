@@ -7,6 +7,7 @@ use envfield_affordance::{
     afford, align_in_scene, align_to_trajectory, check_pose, check_sequence, get_up, lie_down,
     plausible, pose_supported, sit_down, standing_pose, walk, AffordanceConfig, AlignConfig,
     FilterConfig, Joint, LieConfig, Pose, PoseSequence, SitConfig, Support, WalkConfig,
+    MAX_TORSO_RADIUS,
 };
 use envfield_scene::{ObjectKind, Primitive, Scene, SceneObject};
 use nalgebra::{Isometry3, Point3, Vector3};
@@ -573,4 +574,24 @@ fn the_filters_shortcut_finds_what_every_try_finds() {
         }
     }
     assert!(found > 100, "{found} supported torsos");
+}
+
+#[test]
+fn a_torso_wider_than_the_bound_or_not_a_number_is_refused_naming_it() {
+    for radius in [-0.1, f32::NAN, MAX_TORSO_RADIUS + 0.01, 5.0] {
+        let config = FilterConfig {
+            torso_radius: radius,
+            ..FilterConfig::default()
+        };
+        let err = config.validate().unwrap_err().to_string();
+        assert!(
+            err.contains("torso_radius of 0 to 0.5 m"),
+            "{radius}: {err}"
+        );
+    }
+    let edge = FilterConfig {
+        torso_radius: MAX_TORSO_RADIUS,
+        ..FilterConfig::default()
+    };
+    assert!(edge.validate().is_ok());
 }
