@@ -5,7 +5,7 @@
 use envfield::eikonal::FastMarching;
 use envfield::grid::{Cell2, FieldModel, Grid2};
 use envfield::nets::FieldNet;
-use envfield::plan::crowd::{random_trips, walk_crowd, CrowdConfig, Trip};
+use envfield::plan::crowd::{plan_crowd, random_trips, walk_crowd, CrowdConfig, Ending, Trip};
 use envfield::scene::{floor_map, generate_room, FloorMapConfig, RoomConfig};
 use std::path::Path;
 
@@ -121,4 +121,21 @@ fn a_crowd_in_an_unseen_room_arrives_without_touching() {
         arrived * 100 >= people * 95,
         "{arrived} of {people} arrived"
     );
+}
+
+#[test]
+fn sixteen_people_in_a_room_it_never_saw_all_arrive_with_ours_on_the_shipped_field() {
+    // Room 3,000,001 of the held-out crowd table (the field trained on rooms 0-1,499).
+    let map = room_map(3_000_001);
+    let config = CrowdConfig::default();
+    let trips = random_trips(&map, 16, &config, 10.0, 3_000_001).unwrap();
+    let run = plan_crowd(&map, &trips, &shipped(), &config).unwrap();
+    assert_eq!(run.ending, Ending::Arrived, "{:?}", run.arrived_at);
+    assert_eq!(run.person_collisions(config.body_radius), 0);
+    assert_eq!(run.obstacle_collisions(&map), 0);
+    // People stay on the map after arriving: the last frame has everyone on their goal.
+    let last = run.frames.last().unwrap();
+    for (i, trip) in trips.iter().enumerate() {
+        assert_eq!(last[i].round(), Some(trip.goal), "person {i}");
+    }
 }

@@ -1,11 +1,15 @@
-//! Several people walking through one floor map at once (paper section 4.1 and its Algorithm
-//! 1), and the ORCA crowd loop (van den Berg et al. 2011) to set beside it.
+//! Several people walking through one floor map at once: our planner [`plan_crowd`] (priority
+//! inheritance with backtracking over the fields' steps, [`pibt_crowd`], and the LaCAM search
+//! [`lacam_crowd`] where that stalls; people stay on their goals and are pushed aside), the
+//! paper's Algorithm 1 (section 4.1, [`walk_crowd`]), and to set beside them the ORCA crowd loop
+//! (van den Berg et al. 2011, [`orca_crowd`]) and PIBT on a one-body-per-cell lattice
+//! ([`grid_pibt`], as multi-agent path finding writes it).
 //!
 //! Everything is in cell units of the *walkable* map: the floor map with its obstacles grown by
 //! the body radius, so a free cell is a place a person's centre may stand. People are discs of
 //! [`CrowdConfig::body_radius`] around their centres.
 //!
-//! One time step of [`walk_crowd`] (Algorithm 1):
+//! One time step of [`walk_crowd`] (Algorithm 1; [`PibtCrowd`] has ours):
 //! 1. for every person still walking, the map with the others' discs (twice the body radius
 //!    around their centres) marked as obstacles, and its field for that person's goal; all of
 //!    them in one [`FieldModel::predict_many`](envfield_grid::FieldModel::predict_many) call (one batched forward pass for a network);
