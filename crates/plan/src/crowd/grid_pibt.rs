@@ -2,7 +2,7 @@
 //! [`grid_pibt`] on an occupancy grid whose cell holds one body.
 
 use super::geometry::{point, segment_clear};
-use super::{check_trips, CrowdConfig, CrowdRun, Ending, Trip};
+use super::{check_trips, CrowdConfig, CrowdRun, Trip};
 use crate::Result;
 use envfield_grid::{Cell2, Grid2, Point2, SplitMix64};
 use std::collections::VecDeque;
@@ -112,10 +112,7 @@ pub fn grid_pibt(
             .push(at.iter().map(|&v| lattice.point(v)).collect());
     }
     run.arrived_at = arrived_since;
-    run.ending = match run.all_arrived() {
-        true => Ending::Arrived,
-        false => Ending::StepBudget,
-    };
+    run.finish();
     Ok(run)
 }
 

@@ -2,7 +2,8 @@
 //! Okumura 2023): [`lacam_crowd`], for the problems PIBT alone leaves short.
 
 use super::geometry::{candidates, closest_approach, point, segment_clear, value_at};
-use super::{check_trips, CrowdConfig, CrowdRun, Ending, PibtCrowd, Trip};
+use super::push::Pushes;
+use super::{check_trips, CrowdConfig, CrowdRun, PibtCrowd, Trip};
 use crate::Result;
 use envfield_grid::{Field2, FieldModel, Grid2, Point2, SplitMix64};
 use std::cell::RefCell;
@@ -157,10 +158,7 @@ pub fn lacam_crowd(
             Some(_) => None,
         };
     }
-    run.ending = match run.all_arrived() {
-        true => Ending::Arrived,
-        false => Ending::StepBudget,
-    };
+    run.finish();
     Ok(run)
 }
 
@@ -213,7 +211,7 @@ pub fn plan_crowd(
     }
     let mut walked = crowd.into_run();
     if walked.all_arrived() {
-        walked.ending = Ending::Arrived;
+        walked.finish();
         return Ok(walked);
     }
     let searched = lacam_crowd(walkable, trips, model, config)?;
@@ -389,20 +387,16 @@ impl Space<'_> {
             }
             next[i] = Some(end);
         }
-        let mut pibt = Pibt {
-            space: self,
-            config,
-            next,
-            chosen: Vec::new(),
-            tries: 0,
-            budget: 64 * n,
-        };
+        let mut pushes = Pushes::new(config, next, disc, 64 * n);
+        let mut ends = |i: usize| self.ends(i, config[i]);
         for &i in order {
-            if pibt.next[i].is_none() && !pibt.choose(i) {
-                pibt.next[i] = Some(config[i]);
+            if pushes.next[i].is_none() && !pushes.choose(i, &mut ends) {
+                pushes.next[i] = Some(config[i]);
             }
         }
-        let next: Vec<Point2> = (0..n).map(|i| pibt.next[i].unwrap_or(config[i])).collect();
+        let next: Vec<Point2> = (0..n)
+            .map(|i| pushes.next[i].unwrap_or(config[i]))
+            .collect();
         // Someone who could not move may stand in a constrained step's way.
         for i in 0..n {
             for k in i + 1..n {
@@ -412,62 +406,5 @@ impl Space<'_> {
             }
         }
         Some(next)
-    }
-}
-
-/// One PIBT step's choices.
-struct Pibt<'s> {
-    space: &'s Space<'s>,
-    config: &'s [Point2],
-    next: Vec<Option<Point2>>,
-    chosen: Vec<usize>,
-    tries: usize,
-    budget: usize,
-}
-
-impl Pibt<'_> {
-    /// PIBT's call for person `i`, as in [`PibtCrowd`](super::PibtCrowd): the first end clear
-    /// of every chosen step whose one unchosen person in the way makes way; everything undone
-    /// on failure.
-    fn choose(&mut self, i: usize) -> bool {
-        if self.tries >= self.budget {
-            return false;
-        }
-        self.tries += 1;
-        let disc = 2.0 * self.space.config.body_radius;
-        let from = self.config[i];
-        for &to in self.space.ends(i, from).iter() {
-            let clear = (0..self.config.len()).all(|k| {
-                k == i
-                    || self.next[k]
-                        .is_none_or(|e| closest_approach(from, to, self.config[k], e) >= disc)
-            });
-            if !clear {
-                continue;
-            }
-            let in_the_way: Vec<usize> = (0..self.config.len())
-                .filter(|&k| {
-                    k != i
-                        && self.next[k].is_none()
-                        && closest_approach(from, to, self.config[k], self.config[k]) < disc
-                })
-                .collect();
-            if in_the_way.len() > 1 {
-                continue;
-            }
-            let mark = self.chosen.len();
-            self.next[i] = Some(to);
-            self.chosen.push(i);
-            if in_the_way
-                .iter()
-                .all(|&k| self.next[k].is_some() || self.choose(k))
-            {
-                return true;
-            }
-            for k in self.chosen.drain(mark..) {
-                self.next[k] = None;
-            }
-        }
-        false
     }
 }

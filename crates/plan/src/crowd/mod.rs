@@ -32,6 +32,7 @@ mod grid_pibt;
 mod lacam;
 mod orca;
 mod pibt;
+mod push;
 mod run;
 mod step;
 mod trips;

@@ -2,7 +2,7 @@
 //! beside Algorithm 1 on the same maps and trips.
 
 use super::geometry::{candidates, point, segment_clear, value_at};
-use super::{check_trips, CrowdConfig, CrowdRun, Ending, Trip};
+use super::{check_trips, CrowdConfig, CrowdRun, Trip};
 use crate::Result;
 use dodgy_2d::{Agent, AvoidanceOptions, Obstacle, Vec2};
 use envfield_eikonal::{FastMarching, Order};
@@ -49,10 +49,7 @@ pub fn orca_crowd(
 ) -> Result<CrowdRun> {
     let mut crowd = OrcaCrowd::new(walkable, trips, config, orca)?;
     while crowd.run.steps() < config.max_steps && crowd.step() {}
-    crowd.run.ending = match crowd.run.all_arrived() {
-        true => Ending::Arrived,
-        false => Ending::StepBudget,
-    };
+    crowd.run.finish();
     Ok(crowd.run)
 }
 

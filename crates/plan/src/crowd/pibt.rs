@@ -3,16 +3,14 @@
 
 use super::geometry::{candidates, closest_approach, mark_discs, point, predict_where_free};
 use super::geometry::{segment_clear, value_at};
-use super::{check_trips, CrowdConfig, CrowdRun, Ending, Trip};
+use super::push::Pushes;
+use super::{check_trips, CrowdConfig, CrowdRun, Trip};
 use crate::Result;
 use envfield_grid::{Cell2, Field2, FieldModel, Grid2, Point2, SplitMix64};
 
 /// Calls of the recursive choice per person and time step after which nobody else is asked
 /// to move in that step (plain PIBT asks each person once).
 const TRIES_PER_PERSON: usize = 64;
-
-/// People one candidate step may push at once.
-const MAX_PUSHED: usize = 1;
 
 /// Several people by priority inheritance with backtracking (PIBT, Okumura et al. 2019/2022)
 /// over continuous steps, guided by `model`'s fields, until everyone stands on their goal at
@@ -46,10 +44,7 @@ pub fn pibt_crowd(
 ) -> Result<CrowdRun> {
     let mut crowd = PibtCrowd::new(walkable, trips, model, config)?;
     while crowd.run.steps() < config.max_steps && crowd.step()? {}
-    crowd.run.ending = match crowd.run.all_arrived() {
-        true => Ending::Arrived,
-        false => Ending::StepBudget,
-    };
+    crowd.run.finish();
     Ok(crowd.run)
 }
 
@@ -90,20 +85,6 @@ pub struct PibtCrowd<'a, M> {
     /// Time steps each person off their goal has stood still.
     still: Vec<usize>,
     run: CrowdRun,
-}
-
-/// One time step's choices, as the recursion fills them in.
-struct Choice<'f> {
-    /// This step's end for those who have chosen.
-    next: Vec<Option<Point2>>,
-    /// Each person's field on the map with the others marked, where it reaches them.
-    fields: Vec<Option<&'f Field2>>,
-    /// Calls of [`PibtCrowd::choose`] so far this step.
-    tries: usize,
-    /// Calls after which nobody else is asked to move this step.
-    budget: usize,
-    /// Who has chosen, in order (what a failed call undoes).
-    chosen: Vec<usize>,
 }
 
 // By hand: a derive would ask `M: Clone`, and only the reference is cloned.
@@ -185,37 +166,37 @@ impl<'a, M: FieldModel> PibtCrowd<'a, M> {
             return Ok(false);
         }
         let changed = self.fields_with_others(&off)?;
-        let mut choice = Choice {
-            next: vec![None; n],
-            fields: vec![None; n],
-            tries: 0,
-            budget: TRIES_PER_PERSON * n,
-            chosen: Vec::new(),
-        };
+        let mut fields: Vec<Option<&Field2>> = vec![None; n];
         for (&i, field) in off.iter().zip(&changed) {
-            choice.fields[i] = field
+            fields[i] = field
                 .as_ref()
                 .filter(|f| value_at(f, self.pos[i]).is_finite());
         }
         let mut order: Vec<usize> = (0..n).collect();
         order.sort_by(|&a, &b| self.priority[b].total_cmp(&self.priority[a]));
+        let disc = 2.0 * self.config.body_radius;
+        let mut pushes = Pushes::new(&self.pos, vec![None; n], disc, TRIES_PER_PERSON * n);
+        let mut ends = |i: usize| self.ordered_candidates(i, fields[i]);
+        let mut waits = 0;
         for &i in &order {
-            if choice.next[i].is_none() && !self.choose(i, &mut choice) {
-                choice.next[i] = Some(self.pos[i]);
-                self.run.waits += 1;
+            if pushes.next[i].is_none() && !pushes.choose(i, &mut ends) {
+                pushes.next[i] = Some(self.pos[i]);
+                waits += 1;
             }
         }
+        let next = pushes.next;
+        self.run.waits += waits;
         // The first in priority could not move: whoever stands in their best step's way and
         // could not make way (cornered) goes first from now on, until they reach their goal.
         let top = order[0];
-        if self.pos[top] != self.goals[top] && choice.next[top] == Some(self.pos[top]) {
-            if let Some(k) = self.in_the_way(top, choice.fields[top]) {
+        if self.pos[top] != self.goals[top] && next[top] == Some(self.pos[top]) {
+            if let Some(k) = self.in_the_way(top, fields[top]) {
                 self.priority[k] = self.priority[top].floor() + 1.0 + self.priority[k].fract();
             }
         }
         let t = self.run.steps() + 1;
         for i in 0..n {
-            let end = choice.next[i].unwrap_or(self.pos[i]);
+            let end = next[i].unwrap_or(self.pos[i]);
             let was_home = self.pos[i] == self.goals[i];
             self.still[i] = match end == self.pos[i] && !was_home {
                 true => self.still[i] + 1,
@@ -252,58 +233,6 @@ impl<'a, M: FieldModel> PibtCrowd<'a, M> {
         predict_where_free(self.model, &maps, goals)
     }
 
-    /// Step 3 for person `i` (PIBT's recursive call): takes the first candidate, in `i`'s
-    /// order, that is clear of the map and of every chosen step and whose unchosen neighbours
-    /// (at most [`MAX_PUSHED`]) can all make way. When none can, or the step's budget of calls
-    /// is spent, returns `false` with every choice made under this call undone: `i` and
-    /// everyone they pushed stand where they are, unchosen, and may be asked again.
-    fn choose(&mut self, i: usize, choice: &mut Choice<'_>) -> bool {
-        if choice.tries >= choice.budget {
-            return false;
-        }
-        choice.tries += 1;
-        let disc = 2.0 * self.config.body_radius;
-        let from = self.pos[i];
-        for to in self.ordered_candidates(i, choice.fields[i]) {
-            if !segment_clear(self.walkable, from, to) {
-                continue;
-            }
-            let clear_of_chosen = (0..self.pos.len()).all(|k| {
-                k == i
-                    || choice.next[k]
-                        .is_none_or(|end| closest_approach(from, to, self.pos[k], end) >= disc)
-            });
-            if !clear_of_chosen {
-                continue;
-            }
-            let in_the_way: Vec<usize> = (0..self.pos.len())
-                .filter(|&k| {
-                    k != i
-                        && choice.next[k].is_none()
-                        && closest_approach(from, to, self.pos[k], self.pos[k]) < disc
-                })
-                .collect();
-            if in_the_way.len() > MAX_PUSHED {
-                continue;
-            }
-            let mark = choice.chosen.len();
-            choice.next[i] = Some(to);
-            choice.chosen.push(i);
-            // Someone pushed earlier in this loop may have pushed the next one already, with
-            // this step in place: then they are out of the way.
-            let made_way = in_the_way
-                .iter()
-                .all(|&k| choice.next[k].is_some() || self.choose(k, choice));
-            if made_way {
-                return true;
-            }
-            for k in choice.chosen.drain(mark..) {
-                choice.next[k] = None;
-            }
-        }
-        false
-    }
-
     /// The person nearest to `i` among those standing in the way of `i`'s best step clear of
     /// the map.
     fn in_the_way(&self, i: usize, changed: Option<&Field2>) -> Option<usize> {
@@ -312,7 +241,7 @@ impl<'a, M: FieldModel> PibtCrowd<'a, M> {
         let to = self
             .ordered_candidates(i, changed)
             .into_iter()
-            .find(|&to| to != from && segment_clear(self.walkable, from, to))?;
+            .find(|&to| to != from)?;
         (0..self.pos.len())
             .filter(|&k| k != i)
             .map(|k| (k, closest_approach(from, to, self.pos[k], self.pos[k])))
@@ -321,8 +250,9 @@ impl<'a, M: FieldModel> PibtCrowd<'a, M> {
             .map(|(k, _)| k)
     }
 
-    /// `i`'s candidate ends, best first: by the changed map's field where it is finite there,
-    /// then by the empty map's field; standing still among them.
+    /// `i`'s candidate ends whose swept step is clear of the map, best first: by the changed
+    /// map's field where it is finite there, then by the empty map's field; standing still
+    /// among them.
     fn ordered_candidates(&self, i: usize, changed: Option<&Field2>) -> Vec<Point2> {
         let (from, goal) = (self.pos[i], self.goals[i]);
         let mut ends = candidates(from, goal, self.config.step_length, self.config.directions);
@@ -349,7 +279,7 @@ impl<'a, M: FieldModel> PibtCrowd<'a, M> {
         let mut keyed: Vec<(Point2, f32, f32)> = ends
             .into_iter()
             .map(|p| (p, rank(p) + shake * rng.next_f32(), at(statics, p)))
-            .filter(|&(_, _, empty)| empty.is_finite())
+            .filter(|&(p, _, empty)| empty.is_finite() && segment_clear(self.walkable, from, p))
             .collect();
         keyed.sort_by(|a, b| a.1.total_cmp(&b.1).then(a.2.total_cmp(&b.2)));
         keyed.into_iter().map(|(p, _, _)| p).collect()

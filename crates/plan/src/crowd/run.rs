@@ -66,6 +66,14 @@ impl CrowdRun {
         self.stay_on_map || self.arrived_at[i].is_none_or(|a| t < a)
     }
 
+    /// Sets [`CrowdRun::ending`] from who has arrived: the loop has stopped.
+    pub(crate) fn finish(&mut self) {
+        self.ending = match self.all_arrived() {
+            true => Ending::Arrived,
+            false => Ending::StepBudget,
+        };
+    }
+
     /// Whether everyone stands on (or, in Algorithm 1, has reached) their goal.
     pub fn all_arrived(&self) -> bool {
         self.arrived_at.iter().all(Option::is_some)

@@ -2,7 +2,7 @@
 
 use super::geometry::{candidates, closest_approach, mark_discs, point, predict_where_free};
 use super::geometry::{segment_clear, value_at};
-use super::{check_trips, CrowdConfig, CrowdRun, Ending, Trip};
+use super::{check_trips, CrowdConfig, CrowdRun, Trip};
 use crate::Result;
 use envfield_grid::{Field2, FieldModel, Grid2, Point2};
 
@@ -38,10 +38,7 @@ pub fn walk_crowd(
 ) -> Result<CrowdRun> {
     let mut crowd = Crowd::new(walkable, trips, model, config)?;
     while crowd.run.steps() < config.max_steps && crowd.step()? {}
-    crowd.run.ending = match crowd.run.all_arrived() {
-        true => Ending::Arrived,
-        false => Ending::StepBudget,
-    };
+    crowd.run.finish();
     Ok(crowd.run)
 }
 
