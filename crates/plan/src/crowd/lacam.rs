@@ -3,7 +3,7 @@
 
 use super::geometry::{candidates, closest_approach, point, segment_clear, value_at};
 use super::push::Pushes;
-use super::{check_trips, CrowdConfig, CrowdRun, PibtCrowd, Trip};
+use super::{check_trips, CrowdConfig, CrowdRun, Ending, PibtCrowd, Trip};
 use crate::Result;
 use envfield_grid::{Field2, FieldModel, Grid2, Point2, SplitMix64};
 use std::cell::RefCell;
@@ -210,8 +210,8 @@ pub fn plan_crowd(
         }
     }
     let mut walked = crowd.into_run();
-    if walked.all_arrived() {
-        walked.finish();
+    walked.finish();
+    if walked.ending == Ending::Arrived {
         return Ok(walked);
     }
     let searched = lacam_crowd(walkable, trips, model, config)?;

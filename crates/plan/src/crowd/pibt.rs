@@ -60,13 +60,17 @@ pub fn pibt_crowd(
 ///    have the lowest; whoever has waited longest goes first, so everyone comes first in time.
 /// 3. **Steps, in priority order, with inheritance.** A person's candidate ends are the
 ///    headings at the step length, half of it and one cell, the goal when within a step, and
-///    standing still. They are ordered by the field on the changed map where it is finite there
-///    (a way round the others), then by the field on the empty map (the way through them).
-///    A candidate is taken if its swept step is clear of the map and, in continuous time, of
+///    standing still. Each is ranked by the smaller of its value on the changed map (the way
+///    round the others) and its value on the empty map plus one step (the way through someone,
+///    who must step aside); a person who stood still last step has their ranks shaken by up to
+///    a step, since the same choices would repeat. A candidate is taken if its swept step is clear of the map and, in continuous time, of
 ///    every step already chosen. If it would touch exactly one person who has not chosen yet,
 ///    that person inherits the priority and must choose a step out of the way first (with the
 ///    same rule, recursively); if they cannot, the next candidate is tried (backtracking).
-///    A person who can take no candidate stands, and reports failure to whoever pushed them.
+///    A person who can take no candidate stands, and reports failure to whoever pushed them;
+///    everything chosen under a failed try is undone.
+/// 4. **The cornered go first.** When the first in priority cannot move, the person standing in
+///    their best step's way takes the first priority until they reach their goal.
 ///
 /// People who reach their goal stay on the map. They are pushed aside like anyone else when
 /// someone needs to pass, and walk back.
