@@ -185,6 +185,10 @@ fn one(args: &Args, vae: &Cvae) -> Result<()> {
     let mut region = AccessibleRegion::from_kept(&scene, kept, &config)?;
     region.times.filter_ms = filter_ms;
     let region_ms = t.elapsed().as_secs_f64() * 1e3;
+    let left_out = region.left_out_warning();
+    if let Some(w) = &left_out {
+        eprintln!("warning: {w}");
+    }
     region.write_files(&args.out)?;
     if args.motion.any() {
         let points: Vec<_> = region.voxel_centres().iter().map(|&p| p.into()).collect();
@@ -223,6 +227,7 @@ fn one(args: &Args, vae: &Cvae) -> Result<()> {
         "kept": region.samples.len(),
         "accessible_voxels": region.grid.free_count(),
         "components_before_largest": region.components,
+        "left_out": left_out,
         "voxel_m": region.frame.voxel,
         "goal": goal,
         "quality": quality,

@@ -193,6 +193,9 @@ fn main() -> Result<()> {
         region.components,
         region_s
     );
+    if let Some(w) = region.left_out_warning() {
+        eprintln!("warning: {w}");
+    }
     region.write_ply(args.out.join("region.ply"))?;
 
     // Pairs: goals at standing places, starts at least --rise above or below them.

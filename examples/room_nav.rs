@@ -265,6 +265,9 @@ fn main() -> Result<()> {
         let t = Instant::now();
         let region = sample_region(&vae, &scene, args.samples, seed)?;
         region_s.push(t.elapsed().as_secs_f64());
+        if let Some(w) = region.left_out_warning() {
+            eprintln!("warning: room {seed}: {w}");
+        }
         // A learned field only for the planners that read one: `--planners ours_exact,prm`
         // runs on a room no field was trained for, without training one.
         let net = if needs_net {

@@ -459,20 +459,29 @@ fn room_nav_and_birdseye_refuse_empty_runs_wrapping_seeds_and_huge_rooms() {
 
 /// Issue 36, cases 3 and 8 (and the import of the real-scenes issue): a scene whose floor is
 /// 1 m up and a kilometre from the origin, or written y-up, walks as the same scene at the
-/// origin does once imported; read with the wrong up axis, it warns naming `--up y`.
+/// origin does once imported; read with the wrong up axis, it warns naming `--up y` (its
+/// furniture stands on no floor that way).
 #[test]
 fn room_scenes_are_moved_onto_their_floor_and_turned_upright() {
     let Some(room) = example("room") else { return };
     let dir = scratch("import");
-    // A 5 x 4 m floor and a 1 x 1 x 0.8 m box, as (x, y, z) corners of quads.
-    let quads: [[[f32; 3]; 4]; 6] = [
-        [[0., 0., 0.], [5., 0., 0.], [5., 4., 0.], [0., 4., 0.]],
-        [[2., 1., 0.8], [3., 1., 0.8], [3., 2., 0.8], [2., 2., 0.8]],
-        [[2., 1., 0.], [3., 1., 0.], [3., 1., 0.8], [2., 1., 0.8]],
-        [[2., 2., 0.], [3., 2., 0.], [3., 2., 0.8], [2., 2., 0.8]],
-        [[2., 1., 0.], [2., 2., 0.], [2., 2., 0.8], [2., 1., 0.8]],
-        [[3., 1., 0.], [3., 2., 0.], [3., 2., 0.8], [3., 1., 0.8]],
-    ];
+    // A 5 x 4 m floor and three boxes standing on it (a table, a bed, a cabinet: what stands
+    // on the floor tells up), as (x, y, z) corners of quads.
+    let mut quads: Vec<[[f32; 3]; 4]> =
+        vec![[[0., 0., 0.], [5., 0., 0.], [5., 4., 0.], [0., 4., 0.]]];
+    for ([x0, y0], [x1, y1], h) in [
+        ([2., 1.], [3., 2.], 0.8),
+        ([0.5, 2.5], [1.2, 3.5], 0.5),
+        ([3.5, 0.2], [4.5, 0.9], 1.0),
+    ] {
+        quads.extend([
+            [[x0, y0, h], [x1, y0, h], [x1, y1, h], [x0, y1, h]],
+            [[x0, y0, 0.], [x1, y0, 0.], [x1, y0, h], [x0, y0, h]],
+            [[x0, y1, 0.], [x1, y1, 0.], [x1, y1, h], [x0, y1, h]],
+            [[x0, y0, 0.], [x0, y1, 0.], [x0, y1, h], [x0, y0, h]],
+            [[x1, y0, 0.], [x1, y1, 0.], [x1, y1, h], [x1, y0, h]],
+        ]);
+    }
     let obj = |f: &dyn Fn([f32; 3]) -> [f32; 3]| {
         let mut text = String::new();
         for (k, q) in quads.iter().enumerate() {

@@ -70,6 +70,9 @@ pub use field3::{ExactField3, LearnedField3, VoxelField3};
 pub use field3_store::FieldStore;
 pub use field3_train::{train_field3, Field3Config, Field3Report};
 pub use nav::{PoseFilter, SceneTables};
-pub use region::{AccessibleRegion, BuildTimes, RegionConfig, SitDown};
+pub use region::{
+    AccessibleRegion, BuildTimes, LeftOut, RegionConfig, SitDown, LEFT_OUT_LEVEL_M,
+    LEFT_OUT_NAMED_M2, LEFT_OUT_STOREY_M2,
+};
 pub use sampling::{draw_torsos, sample_region};
 pub use surfaces::standing_torsos;

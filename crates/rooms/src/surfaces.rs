@@ -138,6 +138,65 @@ mod tests {
         assert!(!region.contains([3.125, 1.125, 2.5 + up]));
         assert!(!region.contains([3.125, 1.125, 2.3 + up]));
         assert_eq!(region.components, 2);
+        // The slab's top (2 x 2 m, its region kept clear of the edges) is left out, too small
+        // a storey to be named: a bed or a table top left out is no news.
+        assert_eq!(region.left_out[0].min[..2], [2.0, 0.0]);
+        assert!(region.left_out_warning().is_none());
+    }
+
+    /// Issue 56: two 3 x 3 m rooms joined by a 0.2 m slot. The region keeps one and says
+    /// where the other lies, that nothing joins it; a slot a body fits through joins them.
+    #[test]
+    fn a_room_the_region_leaves_out_is_named() {
+        let two_rooms = |slot: f32| {
+            let mut scene = Scene::new();
+            slab(
+                &mut scene,
+                "floor",
+                [6.3, 3.0, 0.1],
+                [3.15, 1.5, -0.05],
+                0.0,
+            );
+            // The dividing wall, 0.3 m thick at x = 3..3.3, open for `slot` around y = 1.5.
+            let side = (3.0 - slot) / 2.0;
+            slab(
+                &mut scene,
+                "wall a",
+                [0.3, side, 2.5],
+                [3.15, side / 2.0, 1.25],
+                0.0,
+            );
+            slab(
+                &mut scene,
+                "wall b",
+                [0.3, side, 2.5],
+                [3.15, 3.0 - side / 2.0, 1.25],
+                0.0,
+            );
+            let torsos = standing_torsos(&scene, 0.25).expect("torsos");
+            AccessibleRegion::from_drawn(&scene, &torsos, &RegionConfig::default().in_place())
+                .expect("region")
+        };
+        let apart = two_rooms(0.2);
+        let warning = apart.left_out_warning().expect("the other room is named");
+        let other = &apart.left_out[0];
+        assert!(other.area_m2 > 4.0, "{other:?}");
+        // The kept room is one side of the wall; the named one the other.
+        let xs: Vec<f32> = apart.voxel_centres().iter().map(|p| p[0]).collect();
+        let kept_left = xs.iter().all(|&x| x < 3.0);
+        assert!(kept_left || xs.iter().all(|&x| x > 3.3));
+        let beyond = if kept_left {
+            other.min[0] >= 3.0
+        } else {
+            other.max[0] <= 3.3
+        };
+        assert!(beyond, "{other:?}");
+        assert!(
+            warning.contains("left out") && warning.contains("narrower than the body"),
+            "{warning}"
+        );
+        let joined = two_rooms(1.0);
+        assert!(joined.left_out_warning().is_none(), "{:?}", joined.left_out);
     }
 
     #[test]

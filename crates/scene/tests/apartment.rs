@@ -269,3 +269,82 @@ fn the_default_catalogue_is_all_training() {
     assert!((0..cat.items.len()).all(|i| cat.half(i) == Some(Half::Training)));
     assert!(cat.only(Half::Evaluation).items.is_empty());
 }
+
+/// Issue 56: the up axis is judged from what stands on the floor. Generated rooms, rooms
+/// furnished from both catalogues and apartments, read as written, give no warning; written
+/// y-up and read as z-up, or z-up and read with `--up y`, the warning names the flag that
+/// fixes it. `ENVFIELD_AXIS_SEEDS` widens the seeds (docs/hostile-input.md: 20).
+#[test]
+fn the_up_axis_is_read_right_and_a_turned_file_is_named() {
+    use envfield_scene::nalgebra::Point3;
+    use envfield_scene::{
+        catalogue_room, generate_room, import_mesh, ImportConfig, RoomConfig, TriangleMesh, Units,
+        UpAxis,
+    };
+    let seeds: u64 = std::env::var("ENVFIELD_AXIS_SEEDS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(6);
+    let mut scenes: Vec<(String, TriangleMesh)> = (0..seeds)
+        .map(|s| {
+            let room = generate_room(&RoomConfig::default(), s).unwrap();
+            (format!("generated room {s}"), room.scene.to_mesh())
+        })
+        .collect();
+    let test = "the_up_axis_is_read_right_and_a_turned_file_is_named";
+    for (name, catalogue) in [
+        ("catalogue", default_catalogue(test)),
+        ("contrib", contrib(test)),
+    ] {
+        let Some(c) = catalogue else { return };
+        for s in 0..seeds {
+            let room = catalogue_room(&c, &RoomConfig::catalogue(), s).unwrap();
+            scenes.push((format!("{name} room {s}"), room.scene.to_mesh()));
+            let apt = apartment(&c, &ApartmentConfig::default(), s).unwrap();
+            scenes.push((format!("{name} apartment {s}"), apt.home.scene.to_mesh()));
+        }
+    }
+    let (z, y) = (
+        ImportConfig::new(UpAxis::Z, Units::Metres),
+        ImportConfig::new(UpAxis::Y, Units::Metres),
+    );
+    let mut wrong = Vec::new();
+    for (name, mesh) in &scenes {
+        // The same scene as a y-up file: its y is height, its z points out of the room.
+        let yup = TriangleMesh {
+            vertices: mesh
+                .vertices
+                .iter()
+                .map(|v| Point3::new(v.x, v.z, -v.y))
+                .collect(),
+            triangles: mesh.triangles.clone(),
+        };
+        for (file, config, flag) in [
+            (mesh, &z, None),
+            (&yup, &y, None),
+            (&yup, &z, Some("--up y")),
+            (mesh, &y, Some("--up z")),
+        ] {
+            let (_, report) = import_mesh(file, config).unwrap();
+            let ok = match flag {
+                None => report.warnings.is_empty(),
+                Some(f) => report.warnings.iter().any(|w| w.contains(f)),
+            };
+            if !ok {
+                wrong.push(format!(
+                    "{name} read with up {} (want {}): {:?}",
+                    config.up,
+                    flag.unwrap_or("no warning"),
+                    report.warnings
+                ));
+            }
+        }
+    }
+    assert!(
+        wrong.is_empty(),
+        "{} of {}:\n{}",
+        wrong.len(),
+        4 * scenes.len(),
+        wrong.join("\n")
+    );
+}

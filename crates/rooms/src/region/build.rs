@@ -1,7 +1,7 @@
 //! How a region is built from kept torso samples, step by step: the lattice, the samples'
 //! voxels, the gaps between them closed, the sit-downs laid in, the largest connected set.
 
-use super::{AccessibleRegion, BuildTimes, SitDown};
+use super::{AccessibleRegion, BuildTimes, LeftOut, SitDown};
 use crate::{Result, RoomsError};
 use envfield_affordance::Pose;
 use envfield_grid::Point3m;
@@ -100,8 +100,9 @@ pub(super) fn build(
     }
     times.sit_downs_ms = ms(start);
     let start = Instant::now();
-    let (grid, components) = largest_set(&voxels)?;
+    let (grid, components, left_out) = largest_set(&voxels)?;
     let mut region = AccessibleRegion::new(frame, grid, kept, components)?;
+    region.left_out = left_out;
     region.sit_downs = sit_downs
         .into_iter()
         .filter(|s| region.contains(s.seated))
@@ -179,8 +180,9 @@ fn lay_sit_down(voxels: &mut Voxels<'_>, sit: &SitDown, voxel: f32) -> Result<()
     Ok(())
 }
 
-/// The largest 26-connected set of the voxels that are on, and how many sets there were.
-fn largest_set(voxels: &Voxels<'_>) -> Result<(Grid3, usize)> {
+/// The largest 26-connected set of the voxels that are on, how many sets there were, and the
+/// sets left out, largest first.
+fn largest_set(voxels: &Voxels<'_>) -> Result<(Grid3, usize, Vec<LeftOut>)> {
     let all = voxels.grid()?;
     let components = all.free_components();
     let largest = components.largest().unwrap_or(0);
@@ -191,5 +193,55 @@ fn largest_set(voxels: &Voxels<'_>) -> Result<(Grid3, usize)> {
             "the kept samples all lie outside the scene's box".into(),
         ));
     }
-    Ok((grid, components.count()))
+    Ok((
+        grid,
+        components.count(),
+        left_out(voxels, &components.labels, largest),
+    ))
+}
+
+/// What each set of voxels but the `largest` covers: its voxels, its columns and its box.
+fn left_out(voxels: &Voxels<'_>, labels: &[usize], largest: usize) -> Vec<LeftOut> {
+    use std::collections::{HashMap, HashSet};
+    /// A set's voxels, its columns seen from above and its box, in cells.
+    struct Set {
+        voxels: usize,
+        columns: HashSet<(usize, usize)>,
+        lo: [usize; 3],
+        hi: [usize; 3],
+    }
+    let mut sets: HashMap<usize, Set> = HashMap::new();
+    for (i, &l) in labels.iter().enumerate() {
+        if l == usize::MAX || l == largest {
+            continue;
+        }
+        let c = voxels.cell(i);
+        let set = sets.entry(l).or_insert_with(|| Set {
+            voxels: 0,
+            columns: HashSet::new(),
+            lo: [usize::MAX; 3],
+            hi: [0; 3],
+        });
+        set.voxels += 1;
+        set.columns.insert((c.x, c.y));
+        for (k, v) in [c.x, c.y, c.z].into_iter().enumerate() {
+            set.lo[k] = set.lo[k].min(v);
+            set.hi[k] = set.hi[k].max(v);
+        }
+    }
+    let frame = &voxels.frame;
+    let corner = |c: [usize; 3], far: f32| -> [f32; 3] {
+        std::array::from_fn(|k| frame.origin[k] + (c[k] as f32 + far) * frame.voxel)
+    };
+    let mut out: Vec<LeftOut> = sets
+        .into_values()
+        .map(|set| LeftOut {
+            voxels: set.voxels,
+            area_m2: set.columns.len() as f32 * frame.voxel * frame.voxel,
+            min: corner(set.lo, 0.0),
+            max: corner(set.hi, 1.0),
+        })
+        .collect();
+    out.sort_by_key(|set| std::cmp::Reverse(set.voxels));
+    out
 }

@@ -39,6 +39,34 @@ pub struct BuildTimes {
     pub voxels_ms: f64,
 }
 
+/// A connected set of accessible voxels that the region left out, for it keeps only the
+/// largest: a room joined to the rest by no way the body fits through, a seat no sit-down
+/// reaches, a table top.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct LeftOut {
+    /// Its voxels.
+    pub voxels: usize,
+    /// The floor it covers seen from above (its voxel columns), square metres.
+    pub area_m2: f32,
+    /// Its box's minimum corner, metres.
+    pub min: [f32; 3],
+    /// Its box's maximum corner, metres.
+    pub max: [f32; 3],
+}
+
+/// A part left out of the region at the kept part's floor level (within
+/// [`LEFT_OUT_LEVEL_M`]) is named in [`AccessibleRegion::left_out_warning`] when it covers
+/// this much floor (square metres) or more: a room on the same floor, not a corner.
+pub const LEFT_OUT_NAMED_M2: f32 = 1.0;
+
+/// A part left out at another height is named when it covers this much (square metres) or
+/// more: a storey or a gallery, larger than any bed, table top or seat.
+pub const LEFT_OUT_STOREY_M2: f32 = 6.0;
+
+/// How far (metres) a part's lowest voxel may lie from the kept part's for the two to be on
+/// one floor.
+pub const LEFT_OUT_LEVEL_M: f32 = 0.15;
+
 /// The accessible region of a scene: the voxels holding kept torso samples (and their six
 /// neighbours, closing the gaps between samples), reduced to its largest 26-connected set.
 #[derive(Clone, Debug)]
@@ -51,6 +79,9 @@ pub struct AccessibleRegion {
     pub samples: Vec<Point3m>,
     /// Connected sets before the largest was kept.
     pub components: usize,
+    /// The sets apart from the largest, left out of the region, largest first (empty for a
+    /// region made from its parts).
+    pub left_out: Vec<LeftOut>,
     /// The sit-downs that joined seats to the floor's set ([`AccessibleRegion::from_kept`]),
     /// each ending seated in the region.
     pub sit_downs: Vec<SitDown>,
@@ -91,6 +122,7 @@ impl AccessibleRegion {
             grid,
             samples,
             components,
+            left_out: Vec::new(),
             sit_downs: Vec::new(),
             times: BuildTimes::default(),
             free: std::sync::OnceLock::new(),
@@ -185,6 +217,62 @@ impl AccessibleRegion {
             |centres| Ok(vec![true; centres.len()]),
             |_, _, _| Ok(Vec::new()),
         )
+    }
+
+    /// What the region left out that a user would miss: the parts apart from the largest on
+    /// its floor covering [`LEFT_OUT_NAMED_M2`] or more, or at other heights
+    /// [`LEFT_OUT_STOREY_M2`] or more (a bed or a table top left out is no news), named by
+    /// where they lie, with the floor the region kept; `None` when there are none. Paths are planned within the part
+    /// kept only, so a scene of two rooms joined by a slot narrower than the body reaches
+    /// one of them: this says so.
+    pub fn left_out_warning(&self) -> Option<String> {
+        // The kept part's floor: the lowest of its voxels.
+        let floor = self
+            .free_indices()
+            .iter()
+            .map(|&i| self.frame.center(self.grid.cell(i)).z)
+            .fold(f32::INFINITY, f32::min)
+            - 0.5 * self.frame.voxel;
+        let named: Vec<&LeftOut> = self
+            .left_out
+            .iter()
+            .filter(|p| {
+                let level = (p.min[2] - floor).abs() <= LEFT_OUT_LEVEL_M;
+                p.area_m2
+                    >= if level {
+                        LEFT_OUT_NAMED_M2
+                    } else {
+                        LEFT_OUT_STOREY_M2
+                    }
+            })
+            .collect();
+        let first = named.first()?;
+        let kept = {
+            let columns: std::collections::HashSet<(usize, usize)> = self
+                .free_indices()
+                .iter()
+                .map(|&i| {
+                    let c = self.grid.cell(i);
+                    (c.x, c.y)
+                })
+                .collect();
+            columns.len() as f32 * self.frame.voxel * self.frame.voxel
+        };
+        let total: f32 = named.iter().map(|p| p.area_m2).sum();
+        Some(format!(
+            "the region keeps one connected part ({kept:.1} m2 of floor); {} part(s) apart from \
+             it are left out ({total:.1} m2), the largest {:.1} m2 at x {:.2}..{:.2}, y \
+             {:.2}..{:.2}, z {:.2}..{:.2} m: nothing the body fits through joins them to it \
+             (a doorway or gap narrower than the body?), and nothing is planned there",
+            named.len(),
+            first.area_m2,
+            first.min[0],
+            first.max[0],
+            first.min[1],
+            first.max[1],
+            first.min[2],
+            first.max[2],
+        ))
     }
 
     /// Whether `p` (metres) lies in an accessible voxel.
