@@ -103,7 +103,15 @@ fn main() -> Result<()> {
     let envfield::grid::Components { labels, sizes } = walkable.free_components();
     let largest = (0..sizes.len())
         .max_by_key(|&k| sizes[k])
-        .context("no floor is wide enough for the body radius")?;
+        .with_context(|| {
+            format!(
+                "no floor is wide enough for the body radius ({} m, --body-radius): the floor \
+                 map has no free cell the body fits on. A floor off level or a ramp, a scene \
+                 read with the wrong up axis (--up) or in other units (--units) leaves none: the \
+                 import's warnings say which",
+                args.body_radius
+            )
+        })?;
     let any = walkable.cell(
         labels
             .iter()

@@ -29,7 +29,7 @@ use envfield::rooms::harness::{
 };
 use envfield::rooms::pictures::write_run_files;
 use envfield::rooms::tables::{finite_mean, mean_bytes, Tally};
-use envfield::rooms::{sample_region, AccessibleRegion, Field3Config, FieldStore};
+use envfield::rooms::{sample_region, AccessibleRegion, Field3Config, FieldStore, SceneTables};
 use envfield::scene::RoomConfig;
 use envfield::vae::Cvae;
 use envfield_examples::{MotionArgs, Navmesh, SceneArgs};
@@ -262,6 +262,8 @@ fn main() -> Result<()> {
         let (scene, generated, zones) =
             args.scene
                 .scene_in_rooms(&rooms, seed, Some(args.samples))?;
+        // A scene too large for the pose tables is refused now, not after its region.
+        SceneTables::check(&scene)?;
         let t = Instant::now();
         let region = sample_region(&vae, &scene, args.samples, seed)?;
         region_s.push(t.elapsed().as_secs_f64());

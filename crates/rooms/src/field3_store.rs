@@ -116,16 +116,30 @@ impl FieldStore {
         let same_region = tagged
             .as_deref()
             .is_none_or(|t| t.split('_').next() == Some(fingerprint.as_str()));
-        let fits = same_region
-            && matches!(net.config(), ModelConfig::Goal(c) if c.extent == region.frame.shape.to_vec());
-        match origin {
-            _ if fits => Ok(Some((net, origin))),
-            FieldOrigin::Shipped(_) => Ok(None),
-            _ => Err(unfit(
-                f,
-                "this field was trained on another region (the VAE or the room changed); train \
-                 it again",
+        // Why it does not fit, if it does not: another kind of network, another lattice,
+        // another region.
+        let misfit = match net.config() {
+            ModelConfig::Goal(c) if c.extent != region.frame.shape.to_vec() => Some(format!(
+                "this field was trained on a lattice of {:?} voxels, this region's is {:?} (another \
+                 scene, room or VAE); train it again",
+                c.extent, region.frame.shape
             )),
+            ModelConfig::Goal(_) if !same_region => Some(
+                "this field was trained on another region (the VAE or the room changed); train \
+                 it again"
+                    .to_string(),
+            ),
+            ModelConfig::Goal(_) => None,
+            other => Some(format!(
+                "a `{}` network, not a room field (a room's field is a `goal` network: room_nav \
+                 --save-field or --fields write one)",
+                other.arch()
+            )),
+        };
+        match misfit {
+            None => Ok(Some((net, origin))),
+            Some(_) if matches!(origin, FieldOrigin::Shipped(_)) => Ok(None),
+            Some(why) => Err(unfit(f, &why)),
         }
     }
 
@@ -188,4 +202,42 @@ pub fn save_tagged(
 ) -> Result<()> {
     let (_, key) = tag(region, config);
     Ok(net.save_tagged(path, &[(REGION_TAG, key)])?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{standing_torsos, RegionConfig};
+    use envfield_scene::nalgebra::Isometry3;
+    use envfield_scene::{ObjectKind, Primitive, Scene, SceneObject};
+
+    /// Issue 56: a file that is no room field is refused saying what it is (a bird's-eye
+    /// context network: "a `context` network, not a room field"), where it was told "trained
+    /// on another region".
+    #[test]
+    fn a_network_of_another_kind_is_named_as_such() {
+        let mut scene = Scene::new();
+        let slab = SceneObject::new("floor", ObjectKind::Floor)
+            .with(
+                Primitive::cuboid([3.0, 2.0, 0.1]),
+                Isometry3::translation(1.5, 1.0, -0.05),
+            )
+            .unwrap();
+        scene.add(slab).unwrap();
+        let torsos = standing_torsos(&scene, 0.25).unwrap();
+        let region =
+            AccessibleRegion::from_drawn(&scene, &torsos, &RegionConfig::default().in_place())
+                .unwrap();
+        let context =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/context.safetensors");
+        let store = FieldStore {
+            named: Some(context),
+            ..FieldStore::default()
+        };
+        let e = store
+            .load(&region, &Field3Config::default(), 0)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("a `context` network, not a room field"), "{e}");
+    }
 }

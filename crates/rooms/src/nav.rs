@@ -9,7 +9,7 @@ use envfield_grid::{Point3m, SplitMix64};
 use envfield_plan::space3::{Space3, StepFilter};
 use envfield_plan::PlanError;
 use envfield_scene::nalgebra::{Point3, Vector3};
-use envfield_scene::{DistanceGrid, Scene, SurfaceColumns, SurfacesBeneath};
+use envfield_scene::{DistanceGrid, Scene, SurfaceColumns, SurfacesBeneath, MAX_DISTANCE_SAMPLES};
 
 /// The region's free space: a torso is allowed in an accessible voxel. Samples are uniform
 /// over the accessible voxels, each jittered within its voxel.
@@ -271,6 +271,9 @@ const ABOVE_SOLE: f32 = 0.05;
 /// poses against the scene itself).
 pub const DISTANCE_CELL: f32 = 0.03;
 
+/// How far (metres) [`SceneTables`] reach beyond the scene's box.
+pub const TABLE_MARGIN: f32 = 0.2;
+
 /// The spacing of the surface columns [`clear_beneath`] reads, metres.
 pub const BENEATH_CELL: f32 = 0.02;
 
@@ -286,6 +289,40 @@ pub struct SceneTables {
 }
 
 impl SceneTables {
+    /// Whether `scene`'s tables fit in memory, before any work: a scene too large for them is
+    /// refused naming its size and what to do (a scene in centimetres read as metres, a
+    /// warehouse or a level larger than a home).
+    ///
+    /// # Errors
+    /// [`RoomsError::InvalidInput`] for an empty scene or one whose signed distances every
+    /// [`DISTANCE_CELL`] would be more than [`MAX_DISTANCE_SAMPLES`].
+    pub fn check(scene: &Scene) -> crate::Result<()> {
+        let aabb = scene
+            .aabb()
+            .ok_or_else(|| crate::RoomsError::InvalidInput("the scene is empty".into()))?;
+        let size = aabb.maxs - aabb.mins;
+        let samples = (0..3)
+            .map(|a| ((size[a] + 2.0 * TABLE_MARGIN) / DISTANCE_CELL).ceil() as f64 + 1.0)
+            .product::<f64>();
+        if samples <= MAX_DISTANCE_SAMPLES as f64 {
+            return Ok(());
+        }
+        // The floor those samples hold at this scene's height.
+        let layers = (size.z + 2.0 * TABLE_MARGIN) / DISTANCE_CELL + 1.0;
+        let area = MAX_DISTANCE_SAMPLES as f32 / layers * DISTANCE_CELL * DISTANCE_CELL;
+        Err(crate::RoomsError::InvalidInput(format!(
+            "the scene is {:.1} x {:.1} x {:.1} m: the pose tables (signed distances every {} \
+             cm) would hold {samples:.1e} samples, more than the {MAX_DISTANCE_SAMPLES:.1e} they \
+             may; at this height about {area:.0} m2 of floor fits. Is it in centimetres \
+             (--units cm) or millimetres (--units mm)? A larger scene: plan it room by room, or \
+             walk it with the `level` example",
+            size.x,
+            size.y,
+            size.z,
+            DISTANCE_CELL * 100.0
+        )))
+    }
+
     /// Both tables over `scene`'s bounding box grown by 0.2 m.
     ///
     /// # Errors
@@ -293,8 +330,8 @@ impl SceneTables {
     /// too large to sample).
     pub fn of(scene: &Scene) -> envfield_scene::Result<Self> {
         Ok(Self {
-            distances: DistanceGrid::around(scene, 0.2, DISTANCE_CELL)?,
-            beneath: SurfaceColumns::around(scene, 0.2, BENEATH_CELL)?,
+            distances: DistanceGrid::around(scene, TABLE_MARGIN, DISTANCE_CELL)?,
+            beneath: SurfaceColumns::around(scene, TABLE_MARGIN, BENEATH_CELL)?,
         })
     }
 
@@ -312,4 +349,43 @@ pub fn point(p: Point3m) -> Point3<f32> {
 /// A point moved by `v`.
 pub fn offset(p: Point3m, v: Vector3<f32>) -> Point3m {
     [p[0] + v.x, p[1] + v.y, p[2] + v.z]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use envfield_scene::nalgebra::Isometry3;
+    use envfield_scene::{ObjectKind, Primitive, SceneObject};
+
+    fn floor(size: [f32; 2]) -> Scene {
+        let mut scene = Scene::new();
+        let slab = SceneObject::new("floor", ObjectKind::Floor)
+            .with(
+                Primitive::cuboid([size[0], size[1], 0.1]),
+                Isometry3::translation(size[0] / 2.0, size[1] / 2.0, -0.05),
+            )
+            .unwrap();
+        scene.add(slab).unwrap();
+        let wall = SceneObject::new("wall", ObjectKind::Wall)
+            .with(
+                Primitive::cuboid([size[0], 0.1, 2.5]),
+                Isometry3::translation(size[0] / 2.0, -0.05, 1.25),
+            )
+            .unwrap();
+        scene.add(wall).unwrap();
+        scene
+    }
+
+    /// Issue 56: a 50 m warehouse is refused before any work, naming its size, `--units` and
+    /// the `level` example (it failed after its region, 19 s, with "use a larger cell", which
+    /// no flag sets); an apartment's size passes.
+    #[test]
+    fn a_scene_too_large_for_the_tables_is_refused_at_once() {
+        let e = SceneTables::check(&floor([50.0, 50.0]))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("50.0 x 50.1 x 2.6 m"), "{e}");
+        assert!(e.contains("--units cm") && e.contains("`level`"), "{e}");
+        SceneTables::check(&floor([10.0, 8.0])).unwrap();
+    }
 }

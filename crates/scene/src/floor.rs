@@ -240,9 +240,18 @@ pub fn floor_map(scene: &Scene, config: &FloorMapConfig) -> Result<FloorMap> {
         .filter(|h| h.is_finite())
         .fold(f32::INFINITY, f32::min);
     if !floor_height.is_finite() {
-        return Err(SceneError::InvalidInput(
-            "no ray from above met the scene".into(),
-        ));
+        let size = aabb.maxs - aabb.mins;
+        return Err(SceneError::InvalidInput(format!(
+            "no ray from above met the scene: it is {:.2e} x {:.2e} m and the map's cells are \
+             {res} m apart{}",
+            size.x,
+            size.y,
+            if size.x.max(size.y) < res {
+                ": far smaller than a room (is it in other units than read? --units)"
+            } else {
+                ""
+            }
+        )));
     }
     let obstacles = heights
         .iter()

@@ -22,8 +22,8 @@ impl SignedDistance for Scene {
     }
 }
 
-/// The most samples a grid may hold (256 MB of f32).
-const MAX_SAMPLES: usize = 1 << 26;
+/// The most samples a [`DistanceGrid`] may hold (256 MB of f32).
+pub const MAX_DISTANCE_SAMPLES: usize = 1 << 26;
 
 /// A scene's signed distance at the corners of a regular lattice over a box, trilinear in
 /// between. Where the scene's surface is a plane across a cell the interpolation is exact; near
@@ -58,10 +58,10 @@ impl DistanceGrid {
         let n = shape
             .iter()
             .try_fold(1usize, |n, &s| n.checked_mul(s))
-            .filter(|&n| n <= MAX_SAMPLES)
+            .filter(|&n| n <= MAX_DISTANCE_SAMPLES)
             .ok_or_else(|| {
                 SceneError::InvalidInput(format!(
-                    "distance grid of {shape:?} samples at {cell} m is larger than {MAX_SAMPLES}: \
+                    "distance grid of {shape:?} samples at {cell} m is larger than {MAX_DISTANCE_SAMPLES}: \
                      use a larger cell"
                 ))
             })?;

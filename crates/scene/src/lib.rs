@@ -61,7 +61,7 @@ pub use columns::{SurfaceColumns, SurfacesBeneath};
 pub use error::{Result, SceneError};
 pub use floor::{floor_map, FloorMap, FloorMapConfig, MapFrame};
 pub use gltf_in::{parse_gltf, read_gltf};
-pub use grid::{DistanceGrid, SignedDistance};
+pub use grid::{DistanceGrid, SignedDistance, MAX_DISTANCE_SAMPLES};
 pub use import::{import_mesh, read_scene, ImportConfig, ImportReport, Units, UpAxis, AXIS_MARGIN};
 pub use mesh::{write_point_cloud, write_polyline_obj, MeshPart, TriangleMesh, MAX_COORDINATE};
 pub use object::{ObjectKind, Part, Primitive, SceneObject};

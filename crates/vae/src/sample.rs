@@ -184,7 +184,9 @@ impl Cvae {
             if tried >= 50 * n.max(CHUNK) {
                 return Err(VaeError::InvalidInput(format!(
                     "the occupancy gate passed {} of {tried} anchors, fewer than the {n} \
-                     samples asked for: nobody can be anywhere in this scene (no floor?)",
+                     samples asked for: nobody can be anywhere in this scene (no floor? A scene \
+                     read with the wrong up axis (--up), in other units (--units) or off level \
+                     has none: the import's warnings say which)",
                     out.len()
                 )));
             }

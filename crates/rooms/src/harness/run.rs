@@ -99,8 +99,10 @@ impl<'a> RoomContext<'a> {
     /// took.
     ///
     /// # Errors
-    /// Errors of [`SceneTables::of`] (an empty scene).
+    /// Errors of [`SceneTables::check`] and [`SceneTables::of`] (an empty scene, one too
+    /// large).
     pub fn tables(scene: &Scene) -> Result<(SceneTables, f64)> {
+        SceneTables::check(scene)?;
         let t = Instant::now();
         let tables = SceneTables::of(scene)?;
         Ok((tables, t.elapsed().as_secs_f64()))

@@ -77,7 +77,8 @@ pub(super) fn build(
     if kept.is_empty() {
         return Err(RoomsError::InvalidInput(
             "no torso sample affords a pose here: the scene has no floor or seat the samples \
-             reach"
+             reach (a scene read with the wrong up axis (--up), in other units (--units) or off \
+             level has none: the import's warnings say which)"
                 .into(),
         ));
     }
