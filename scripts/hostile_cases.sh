@@ -5,7 +5,8 @@
 # Prints one line per case: id, exit status, the last line printed (tab-separated). Each case
 # runs under a time limit and a 6 GB address-space limit, so an unbounded allocation aborts.
 # ONLY=36 runs only the cases of issue 36 (the entry points added since the first sweep);
-# ONLY=56 only those of issue 56 fixed so far (data loss, panics, hangs).
+# ONLY=56 only those of issue 56 (data loss, panics, hangs, the up axis, tilt, parts left out,
+# errors that name their cause).
 BIN=$(cd "$1" && pwd); T=$2; mkdir -p "$T"; T=$(cd "$T" && pwd)
 cd "$(dirname "$0")/.."
 export MIMALLOC_PURGE_DELAY=-1 RUST_BACKTRACE=0
@@ -25,6 +26,8 @@ python3 -c "
 n=2000
 rows=['S'+'.'*(n-1)]+['.'*n for _ in range(n-2)]+['.'*(n-1)+'G']
 open('$T/big.txt','w').write('\n'.join(rows)+'\n')"
+# runw: as run, but the first warning printed (or, with none, the last line).
+runw() { id=$1; shift; lim=$1; shift; out=$( (ulimit -v 6000000; timeout $lim "$@") 2>&1 ); rc=$?; w=$(printf '%s' "$out" | grep -m1 "warning:\|^Error" | cut -c1-150); [ -z "$w" ] && w="no warning: $(printf '%s' "$out" | grep -v '^\s*$' | tail -1 | cut -c1-120)"; printf '%s\t%s\t%s\n' "$id" "$rc" "$w"; }
 run() { id=$1; shift; lim=$1; shift; out=$( (ulimit -v 6000000; timeout $lim "$@") 2>&1 ); rc=$?; last=$(printf '%s' "$out" | grep -v '^\s*$' | grep -v "at \./\|^ *[0-9]*: \|^stack backtrace\|note: run with" | tail -1 | cut -c1-150); printf '%s\t%s\t%s\n' "$id" "$rc" "$last"; }
 if [ -z "${ONLY:-}" ]; then
 run 1 60 $BIN/train_maze --size 8 --mazes 0 --steps 2 --out $T/m.safetensors
@@ -144,4 +147,66 @@ run 56-8a 60 $BIN/accessible --scene $T/unit.obj --rooms 1 --out $T/a8
 run 56-8b 60 $BIN/accessible --field-steps 0 --out $T/a8
 run 56-8c 60 $BIN/birdseye_multi --room $T/unit.obj --rooms 2 --out $T/b8
 run 56-8d 60 $BIN/room_nav --save-field $T/f8.safetensors --rooms 2 --out $T/n8
+# The up axis, tilt and units: a generated room written as files of other frames.
+$BIN/room --out $T/g9 > /dev/null 2>&1
+python3 - "$T" <<'PY'
+import math, sys
+t = sys.argv[1]
+vs, fs = [], []
+for line in open(f"{t}/g9/scene.obj"):
+    p = line.split()
+    if p and p[0] == "v":
+        vs.append(tuple(map(float, p[1:4])))
+    elif p and p[0] == "f":
+        fs.append(line)
+def write(name, f, faces=fs):
+    with open(f"{t}/{name}", "w") as out:
+        out.writelines("v %f %f %f\n" % f(*v) for v in vs)
+        out.writelines(faces)
+c, s = math.cos(math.radians(10)), math.sin(math.radians(10))
+write("yup.obj", lambda x, y, z: (x, z, -y))
+write("tilt.obj", lambda x, y, z: (x, c * y - s * z, s * y + c * z))
+write("micro.obj", lambda x, y, z: (x, y, z))
+def boxes(name, bs, extra=""):
+    with open(f"{t}/{name}", "w") as out:
+        n = 0
+        for lo, hi in bs:
+            for k in range(8):
+                out.write("v %f %f %f\n" % tuple(hi[a] if k >> a & 1 else lo[a] for a in range(3)))
+            for q in [(0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5)]:
+                out.write("f %d %d %d %d\n" % tuple(n + 1 + i for i in q))
+            n += 8
+        out.write(extra)
+wall = lambda x0, y0, x1, y1: ((x0, y0, 0), (x1, y1, 2.5))
+# A corridor 10 x 1.2 m, its long walls along x (once told "is the scene y-up?").
+boxes("corridor.obj", [((0, 0, -0.1), (10, 1.2, 0)), wall(0, -0.1, 10, 0), wall(0, 1.2, 10, 1.3)])
+# Ten solid steps on a landing.
+boxes("stairs.obj", [((0, 0, -0.1), (4, 1, 0))] + [((1 + 0.3 * k, 0, 0), (4, 1, 0.18 * (k + 1))) for k in range(10)])
+# Two 3 x 3 m rooms joined by a 0.2 m slot, and by a 0.1 m one.
+boxes("slot.obj", [((0, 0, -0.1), (6.3, 3, 0)), wall(3, 0, 3.3, 1.4), wall(3, 1.6, 3.3, 3)])
+boxes("slot1.obj", [((0, 0, -0.1), (6.3, 3, 0)), wall(3, 0, 3.3, 1.45), wall(3, 1.55, 3.3, 3)])
+# A 50 x 50 m warehouse.
+boxes("warehouse.obj", [((0, 0, -0.1), (50, 50, 0)), wall(0, -0.1, 50, 0), ((10, 10, 0), (12, 11, 2))])
+# A room whose floor is a 10-degree ramp.
+r = 4 * math.tan(math.radians(10))
+boxes("ramp.obj", [wall(0, -0.1, 4, 0), wall(0, 3, 4, 3.1)],
+      "v 0 0 0\nv 4 0 %f\nv 4 3 %f\nv 0 3 0\nf 17 18 19 20\n" % (r, r))
+PY
+runw 56-9a 120 $BIN/room --scene $T/yup.obj --out $T/r9
+runw 56-9b 120 $BIN/room --scene $T/yup.obj --up y --out $T/r9
+runw 56-9c 120 $BIN/room --scene $T/g9/scene.obj --up y --out $T/r9
+runw 56-9d 120 $BIN/room --scene $T/corridor.obj --out $T/r9
+runw 56-9e 120 $BIN/level --scene $T/stairs.obj --up z --out $T/r9
+if [ -f data/recast/dungeon.obj ]; then
+    runw 56-9f 300 $BIN/level --scene data/recast/dungeon.obj --out $T/r9
+fi
+runw 56-10a 120 $BIN/room --scene $T/tilt.obj --out $T/r10
+runw 56-10b 120 $BIN/room --scene $T/ramp.obj --out $T/r10
+run 56-10c 120 $BIN/room --scene $T/ramp.obj --out $T/r10
+run 56-11a 120 $BIN/accessible --scene $T/slot.obj --no-field --json --out $T/r11
+runw 56-11b 120 $BIN/accessible --scene $T/slot1.obj --no-field --out $T/r11
+start=$(date +%s); run 56-12 120 $BIN/room_nav --scene $T/warehouse.obj --pairs 2 --out $T/r12; printf '56-12-time\t-\t%s s\n' $(( $(date +%s) - start ))
+runw 56-13a 60 $BIN/room --scene $T/micro.obj --units 1e-6 --out $T/r13
+run 56-13b 60 $BIN/room --scene $T/micro.obj --units 1e-6 --out $T/r13
+run 56-14 300 $BIN/room_nav --field models/context.safetensors --pairs 2 --planners ours --out $T/r14
 fi

@@ -465,10 +465,13 @@ fn room_nav_and_birdseye_refuse_empty_runs_wrapping_seeds_and_huge_rooms() {
 fn room_scenes_are_moved_onto_their_floor_and_turned_upright() {
     let Some(room) = example("room") else { return };
     let dir = scratch("import");
-    // A 5 x 4 m floor and three boxes standing on it (a table, a bed, a cabinet: what stands
-    // on the floor tells up), as (x, y, z) corners of quads.
-    let mut quads: Vec<[[f32; 3]; 4]> =
-        vec![[[0., 0., 0.], [5., 0., 0.], [5., 4., 0.], [0., 4., 0.]]];
+    // A 5 x 4 m floor, two walls 2.5 m high and three boxes standing on the floor (a table, a
+    // bed, a cabinet: what stands on the floor tells up), as (x, y, z) corners of quads.
+    let mut quads: Vec<[[f32; 3]; 4]> = vec![
+        [[0., 0., 0.], [5., 0., 0.], [5., 4., 0.], [0., 4., 0.]],
+        [[0., 4., 0.], [5., 4., 0.], [5., 4., 2.5], [0., 4., 2.5]],
+        [[0., 0., 0.], [0., 4., 0.], [0., 4., 2.5], [0., 0., 2.5]],
+    ];
     for ([x0, y0], [x1, y1], h) in [
         ([2., 1.], [3., 2.], 0.8),
         ([0.5, 2.5], [1.2, 3.5], 0.5),
@@ -537,8 +540,28 @@ fn room_scenes_are_moved_onto_their_floor_and_turned_upright() {
     assert!(report.contains("floor found at z = 1.000"), "{report}");
     let (_, warned) = valid(&["--scene", &y_up]);
     assert!(warned.contains("--up y"), "{warned}");
-    let (upright, _) = valid(&["--scene", &y_up, "--up", "y"]);
+    let (upright, report) = valid(&["--scene", &y_up, "--up", "y"]);
     assert_eq!(upright, at_origin);
+    // Issue 56: read right, no warning at all; read right but 10 degrees off level, the tilt
+    // is named (not the axis), and the floor that no body fits on is refused naming its
+    // causes and --body-radius.
+    assert!(!report.contains("warning"), "{report}");
+    let (c, s) = (10f32.to_radians().cos(), 10f32.to_radians().sin());
+    let tilted = write(
+        &dir,
+        "tilted.obj",
+        &obj(&|[x, y, z]| [x, c * y - s * z, s * y + c * z]),
+    );
+    let done = run(&room, &["--scene", &tilted, "--out", &out]);
+    let said = String::from_utf8_lossy(&done.stderr);
+    assert!(
+        said.contains("not level") && said.contains("10.0 degrees"),
+        "{said}"
+    );
+    assert!(!said.contains("--up y"), "{said}");
+    if !done.status.success() {
+        assert!(said.contains("--body-radius"), "{said}");
+    }
     // Case 7: the accessible region of the raised, far scene (refused as "no floor?" before).
     if let Some(accessible) = example("accessible") {
         let args = ["--scene", &far, "--no-field", "--json", "--samples", "2000"];

@@ -286,9 +286,9 @@ pub fn import_mesh(
                 "read with {} up, {:.0}% of the furniture ({} objects, by area) stands on the \
                  floor; with {other} up, {:.0}%: is the scene {other}-up? (--up {other})",
                 config.up,
-                100.0 * told.0,
+                (100.0 * told.0).abs(),
                 told.1,
-                100.0 * turned.0,
+                (100.0 * turned.0).abs(),
             ));
         }
     }
@@ -386,8 +386,9 @@ impl fmt::Display for Tilt {
             write!(
                 f,
                 "the scene is not level: its flat surfaces ({:.1} m2) tilt {:.1} degrees off \
-                 level (they face ({:.3}, {:.3}, {:.3})): the floor maps, the region and the \
-                 planners need a level floor; level the file (turn it so they face up)",
+                 level (they face ({:.3}, {:.3}, {:.3})): a file scanned or exported off level \
+                 (turn it level) or a ramp (the `level` example walks slopes)? The floor maps, \
+                 the region and the planners need a level floor",
                 self.area, self.degrees, n.x, n.y, n.z
             )
         } else {

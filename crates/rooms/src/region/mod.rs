@@ -262,8 +262,9 @@ impl AccessibleRegion {
         Some(format!(
             "the region keeps one connected part ({kept:.1} m2 of floor); {} part(s) apart from \
              it are left out ({total:.1} m2), the largest {:.1} m2 at x {:.2}..{:.2}, y \
-             {:.2}..{:.2}, z {:.2}..{:.2} m: nothing the body fits through joins them to it \
-             (a doorway or gap narrower than the body?), and nothing is planned there",
+             {:.2}..{:.2}, z {:.2}..{:.2} m: no way the body fits joins them to it (a doorway \
+             or gap narrower than the body, a step too high, a floor without stairs?), and \
+             nothing is planned there",
             named.len(),
             first.area_m2,
             first.min[0],
