@@ -1092,3 +1092,34 @@ fn a_scenes_field_is_kept_and_found_again() {
     assert!(err.contains("field loaded from"), "{err}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Issue 53, the 3D party: in an apartment furnished with models never trained or tuned on,
+/// four people walk in from other rooms and sit on four seats of one room; no two bodies
+/// overlap at any frame (bones as capsules, every pair), every pose is checked against the
+/// scene. Needs the contributed furniture (scripts/fetch_sweethome3d_contrib.sh).
+#[test]
+fn a_party_of_four_sits_down_with_no_body_overlapping() {
+    let Some(party) = example("party") else {
+        return;
+    };
+    let models = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/sweethome3d-contrib");
+    if !models.is_dir() {
+        assert!(
+            std::env::var("CI").as_deref() != Ok("true"),
+            "CI=true: the contributed furniture is not fetched"
+        );
+        return;
+    }
+    let done = run(&party, &["--apartments", "1", "--seed", "31008", "--json"]);
+    let stdout = String::from_utf8_lossy(&done.stdout);
+    assert!(
+        done.status.success(),
+        "{}",
+        String::from_utf8_lossy(&done.stderr)
+    );
+    let summary: serde_json::Value = serde_json::from_str(stdout.lines().last().unwrap()).unwrap();
+    assert_eq!(summary["body_overlaps"], 0, "{summary}");
+    assert!(summary["seated_pct"].as_f64().unwrap() >= 75.0, "{summary}");
+    assert!(summary["valid_pct"].as_f64().unwrap() >= 95.0, "{summary}");
+    refuses(run(&party, &["--people", "9"]), "--people");
+}

@@ -57,6 +57,7 @@ pub mod field3_store;
 mod field3_train;
 pub mod harness;
 pub mod nav;
+pub mod party;
 pub mod pictures;
 pub mod quality;
 pub mod region;

@@ -294,7 +294,7 @@ impl SceneTables {
     /// warehouse or a level larger than a home).
     ///
     /// # Errors
-    /// [`RoomsError::InvalidInput`] for an empty scene or one whose signed distances every
+    /// [`RoomsError::InvalidInput`](crate::RoomsError::InvalidInput) for an empty scene or one whose signed distances every
     /// [`DISTANCE_CELL`] would be more than [`MAX_DISTANCE_SAMPLES`].
     pub fn check(scene: &Scene) -> crate::Result<()> {
         let aabb = scene

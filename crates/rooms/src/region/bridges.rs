@@ -98,6 +98,26 @@ pub(super) fn sit_down_bridges(
             v.into_iter().step_by(every).map(|(_, p)| p)
         })
         .collect();
+    let chains = tries
+        .par_iter()
+        .map(|&s| sit_down_to(scene, s, config, &beside_largest))
+        .collect::<Result<Vec<_>>>()?;
+    Ok(chains.into_iter().flatten().collect())
+}
+
+/// A sit-down that ends seated with the torso at `s`: at each of the config's headings, onto
+/// a seat as high above the surface under its feet as `s` makes it (0.3-0.75 m), the first
+/// whose standing start `starts` accepts and whose every pose is valid and [`plausible`] (a
+/// frame still standing may rest its thighs on the seat it nears, as a seated one does).
+///
+/// # Errors
+/// Errors of the scene's queries and of [`sit_down`].
+pub(crate) fn sit_down_to(
+    scene: &Scene,
+    s: Point3m,
+    config: &RegionConfig,
+    starts: &(dyn Fn(&Point3<f32>) -> bool + Sync),
+) -> Result<Option<SitDown>> {
     // Where a seated body's torso and feet are, relative to its seat, from one sit-down.
     let probe = sit_down(&SitConfig::default())?;
     let seated = *probe.frames.last().expect("a sit-down has frames");
@@ -105,62 +125,55 @@ pub(super) fn sit_down_bridges(
     let feet = (seated.joint(Joint::LeftAnkle).coords + seated.joint(Joint::RightAnkle).coords)
         / 2.0
         - seated.torso().coords;
-    let chains = tries
-        .par_iter()
-        .map(|&s| -> Result<Option<SitDown>> {
-            let at = Vector3::from(s);
-            for k in 0..config.filter.yaws {
-                let yaw = k as f32 * std::f32::consts::TAU / config.filter.yaws as f32;
-                // The floor under the feet sets the seat's height: the sit-down ends with
-                // the torso at the sample and the soles on that floor.
-                let turn =
-                    envfield_scene::nalgebra::Rotation3::from_axis_angle(&Vector3::z_axis(), yaw);
-                let foot = Point3::from(at + turn * Vector3::new(feet.x, feet.y, 0.0));
-                let Some(floor) = scene.cast_ray(&foot, &-Vector3::z(), SEAT_RANGE.1 + 0.5)? else {
-                    continue;
-                };
-                let seat = s[2] - torso_above_seat - floor.point.z;
-                if !(SEAT_RANGE.0..=SEAT_RANGE.1).contains(&seat) {
-                    continue;
-                }
-                let sit = SitDown {
-                    start: [0.0; 3],
-                    seated: s,
-                    seat_height: seat,
-                    yaw,
-                };
-                let seq = sit.sequence()?;
-                let Some(first) = seq.frames.first() else {
-                    continue;
-                };
-                if !beside_largest(&first.torso()) {
-                    continue;
-                }
-                // Seated first: a heading that faces into the seat's back fails at once.
-                let mut valid = true;
-                for i in std::iter::once(seq.frames.len() - 1).chain(0..seq.frames.len() - 1) {
-                    let (pose, support) = (&seq.frames[i], seq.supports[i]);
-                    // The thighs near the seat as the hips arrive: a frame still standing
-                    // may rest them there, as a seated one does.
-                    let rests = |s| plausible(scene, pose, s, &config.filter.affordance);
-                    if !check_pose(scene, pose, support, &config.filter.affordance)?.valid()
-                        || !(rests(support)? || rests(Support::Sitting)?)
-                    {
-                        valid = false;
-                        break;
-                    }
-                }
-                if valid {
-                    return Ok(Some(SitDown {
-                        start: first.torso().into(),
-                        ..sit
-                    }));
-                }
+    let at = Vector3::from(s);
+    for k in 0..config.filter.yaws {
+        let yaw = k as f32 * std::f32::consts::TAU / config.filter.yaws as f32;
+        // The floor under the feet sets the seat's height: the sit-down ends with the torso
+        // at `s` and the soles on that floor.
+        let turn = envfield_scene::nalgebra::Rotation3::from_axis_angle(&Vector3::z_axis(), yaw);
+        let foot = Point3::from(at + turn * Vector3::new(feet.x, feet.y, 0.0));
+        let Some(floor) = scene.cast_ray(&foot, &-Vector3::z(), SEAT_RANGE.1 + 0.5)? else {
+            continue;
+        };
+        let seat = s[2] - torso_above_seat - floor.point.z;
+        if !(SEAT_RANGE.0..=SEAT_RANGE.1).contains(&seat) {
+            continue;
+        }
+        let sit = SitDown {
+            start: [0.0; 3],
+            seated: s,
+            seat_height: seat,
+            yaw,
+        };
+        let seq = sit.sequence()?;
+        let Some(first) = seq.frames.first() else {
+            continue;
+        };
+        if !starts(&first.torso()) {
+            continue;
+        }
+        // Seated first: a heading that faces into the seat's back fails at once.
+        let mut valid = true;
+        for i in std::iter::once(seq.frames.len() - 1).chain(0..seq.frames.len() - 1) {
+            let (pose, support) = (&seq.frames[i], seq.supports[i]);
+            // The thighs near the seat as the hips arrive: a frame still standing may rest
+            // them there, as a seated one does.
+            let rests = |s| plausible(scene, pose, s, &config.filter.affordance);
+            if !check_pose(scene, pose, support, &config.filter.affordance)?.valid()
+                || !(rests(support)? || rests(Support::Sitting)?)
+            {
+                valid = false;
+                break;
             }
-            Ok(None)
-        })
-        .collect::<Result<Vec<_>>>()?;
-    Ok(chains.into_iter().flatten().collect())
+        }
+        if valid {
+            return Ok(Some(SitDown {
+                start: first.torso().into(),
+                ..sit
+            }));
+        }
+    }
+    Ok(None)
 }
 
 /// A sit-down the region found ([`AccessibleRegion::sit_downs`](super::AccessibleRegion::sit_downs)): [`sit_down`] onto a seat of

@@ -13,6 +13,7 @@ mod build;
 mod config;
 mod write;
 
+pub(crate) use bridges::sit_down_to;
 pub use bridges::SitDown;
 pub use config::RegionConfig;
 
