@@ -39,6 +39,10 @@ struct Args {
     /// People at the table, each on a different chair.
     #[arg(long, default_value_t = 4)]
     people: usize,
+    /// People walking through meanwhile (half from the party's room to another, half between
+    /// other rooms); the guests wait for them too.
+    #[arg(long, default_value_t = 0)]
+    passers: usize,
     /// Torso samples drawn for each apartment's accessible region.
     #[arg(long, default_value_t = 15000)]
     samples: usize,
@@ -57,12 +61,13 @@ fn main() -> Result<()> {
     let args = Args::parse();
     if !(1..=1000).contains(&args.apartments)
         || !(1..=8).contains(&args.people)
+        || args.passers > 8
         || !(1..=1_000_000).contains(&args.samples)
         || args.seed.checked_add(args.apartments).is_none()
     {
         bail!(
-            "--apartments must be in 1..=1000, --people in 1..=8, --samples in 1..=1000000 and \
-             --seed + --apartments fit in 64 bits"
+            "--apartments must be in 1..=1000, --people in 1..=8, --passers in 0..=8, \
+             --samples in 1..=1000000 and --seed + --apartments fit in 64 bits"
         );
     }
     args.motion.check(&[])?;
@@ -80,6 +85,7 @@ fn main() -> Result<()> {
     };
     let maker = scene_args.rooms(RoomConfig::default())?;
     let (mut asked, mut seated, mut overlaps, mut valid, mut frames) = (0, 0, 0, 0.0, 0usize);
+    let mut through = 0;
     let (mut party_s, mut region_s, mut failed) = (Vec::new(), Vec::new(), Vec::new());
     let (mut run, mut skipped, mut seed) = (0u64, Vec::new(), args.seed);
     while run < args.apartments {
@@ -104,6 +110,7 @@ fn main() -> Result<()> {
         region_s.push(t.elapsed().as_secs_f64());
         let config = PartyConfig {
             people: args.people,
+            passers: args.passers,
             seed,
             ..PartyConfig::default()
         };
@@ -122,6 +129,7 @@ fn main() -> Result<()> {
         let sat = party.guests.iter().filter(|g| g.seated).count();
         seated += sat;
         overlaps += party.overlaps;
+        through += party.passers.len();
         for g in &party.guests {
             valid += g.valid_pct * g.motion.frames.len() as f64 / 100.0;
             frames += g.motion.frames.len();
@@ -135,6 +143,8 @@ fn main() -> Result<()> {
             "seated": sat,
             "people": args.people,
             "body_overlaps": party.overlaps,
+            "passers": args.passers,
+            "passers_through": party.passers.len(),
             "valid_pct": party.guests.iter().map(|g| g.valid_pct).collect::<Vec<_>>(),
             "waits_frames": party.guests.iter().map(|g| g.wait).collect::<Vec<_>>(),
             "frames": party.frames,
@@ -144,7 +154,13 @@ fn main() -> Result<()> {
         println!("{line}");
         if k == 0 && args.motion.any() {
             let timelines = party.timelines()?;
-            let names: Vec<String> = (0..timelines.len()).map(|i| format!("guest_{i}")).collect();
+            let guests = party.guests.len();
+            let names: Vec<String> = (0..timelines.len())
+                .map(|i| match i < guests {
+                    true => format!("guest_{i}"),
+                    false => format!("passer_{}", i - guests),
+                })
+                .collect();
             let actors: Vec<Actor> = names
                 .iter()
                 .zip(&timelines)
@@ -172,6 +188,7 @@ fn main() -> Result<()> {
         "people": args.people,
         "seated_pct": 100.0 * seated as f64 / asked.max(1) as f64,
         "body_overlaps": overlaps,
+        "passers_through": through,
         "valid_pct": 100.0 * valid / frames.max(1) as f64,
         "party_s_mean": mean(&party_s),
         "region_s_mean": mean(&region_s),

@@ -1094,9 +1094,9 @@ fn a_scenes_field_is_kept_and_found_again() {
 }
 
 /// Issue 53, the 3D party: in an apartment furnished with models never trained or tuned on,
-/// four people walk in from other rooms and sit on four seats of one room; no two bodies
-/// overlap at any frame (bones as capsules, every pair), every pose is checked against the
-/// scene. Needs the contributed furniture (scripts/fetch_sweethome3d_contrib.sh).
+/// four people walk in from other rooms and sit on four seats of one room while two others
+/// walk through; no two bodies overlap at any frame (bones as capsules, every pair), every
+/// pose is checked against the scene. Needs the contributed furniture (scripts/fetch_sweethome3d_contrib.sh).
 #[test]
 fn a_party_of_four_sits_down_with_no_body_overlapping() {
     let Some(party) = example("party") else {
@@ -1110,7 +1110,16 @@ fn a_party_of_four_sits_down_with_no_body_overlapping() {
         );
         return;
     }
-    let done = run(&party, &["--apartments", "1", "--seed", "31008", "--json"]);
+    let args = [
+        "--apartments",
+        "1",
+        "--seed",
+        "31008",
+        "--passers",
+        "2",
+        "--json",
+    ];
+    let done = run(&party, &args);
     let stdout = String::from_utf8_lossy(&done.stdout);
     assert!(
         done.status.success(),
@@ -1120,6 +1129,10 @@ fn a_party_of_four_sits_down_with_no_body_overlapping() {
     let summary: serde_json::Value = serde_json::from_str(stdout.lines().last().unwrap()).unwrap();
     assert_eq!(summary["body_overlaps"], 0, "{summary}");
     assert!(summary["seated_pct"].as_f64().unwrap() >= 75.0, "{summary}");
+    assert!(
+        summary["passers_through"].as_u64().unwrap() >= 1,
+        "{summary}"
+    );
     assert!(summary["valid_pct"].as_f64().unwrap() >= 95.0, "{summary}");
     refuses(run(&party, &["--people", "9"]), "--people");
 }

@@ -34,11 +34,15 @@ pub struct PartyConfig {
     pub max_wait: usize,
     /// The seed of the starts and the gait.
     pub seed: u64,
+    /// People walking through meanwhile, not sitting: half from the party's room to another,
+    /// half between other rooms; they go first and the guests wait for them too.
+    pub passers: usize,
 }
 
 impl Default for PartyConfig {
     fn default() -> Self {
         Self {
+            passers: 0,
             people: 4,
             wait_step: 10,
             max_wait: 3000,
@@ -87,6 +91,9 @@ impl Guest {
 pub struct Party {
     /// The guests, in the order they were placed.
     pub guests: Vec<Guest>,
+    /// The people walking through ([`PartyConfig::passers`]): `seat` is where they walk to,
+    /// `seated` whether they got there.
+    pub passers: Vec<Guest>,
     /// The seats the region's sit-downs reach where the party sits.
     pub chairs: usize,
     /// Where the party sits.
@@ -101,14 +108,16 @@ pub struct Party {
 }
 
 impl Party {
-    /// The party as one sequence per guest on the common timeline (the wait at the start,
-    /// the motion, then seated to the end): what a viewer plays.
+    /// The party as one sequence per person on the common timeline (the wait at the start,
+    /// the motion, then seated, or standing at the goal, to the end), the guests then the
+    /// people walking through: what a viewer plays.
     ///
     /// # Errors
     /// As [`PoseSequence::new`].
     pub fn timelines(&self) -> Result<Vec<PoseSequence>> {
         self.guests
             .iter()
+            .chain(&self.passers)
             .map(|g| {
                 let frames: Vec<Pose> = (0..self.frames).map(|t| *g.pose_at(t)).collect();
                 let supports = (0..self.frames)
@@ -442,6 +451,95 @@ fn motion(
     ))
 }
 
+/// People walking through the apartment while the party sits down ([`PartyConfig::passers`]):
+/// passer `i` starts in the party's room when `i` is even, in another room when odd, and walks
+/// to a standing place of a room other than its start's, 1.5 m or more from every start and
+/// goal taken and from `avoid` (the guests' starts and sit-downs); each placed after those
+/// before with a wait at its start. A passer whose walk
+/// does not arrive, or that finds no wait, is left out (`seated` false, not in the schedule).
+///
+/// # Errors
+/// Errors of the planner and the pose checks.
+#[allow(clippy::too_many_arguments)]
+fn walk_through(
+    scene: &Scene,
+    region: &AccessibleRegion,
+    places: &[Point3m],
+    avoid: &[Point3m],
+    rooms: &[[f32; 4]],
+    party_room: Option<usize>,
+    gait: &PoseSequence,
+    config: &PartyConfig,
+) -> Result<Vec<Guest>> {
+    let room_of = |p: &Point3m| {
+        rooms
+            .iter()
+            .position(|r| p[0] >= r[0] && p[0] <= r[2] && p[1] >= r[1] && p[1] <= r[3])
+    };
+    let mut rng = SplitMix64::new(config.seed ^ 0x7A55);
+    let mut taken: Vec<Point3m> = avoid.to_vec();
+    let mut out: Vec<Guest> = Vec::new();
+    let check = AffordanceConfig::default();
+    for i in 0..config.passers {
+        let free = |p: &&Point3m, taken: &[Point3m]| {
+            taken
+                .iter()
+                .all(|q| (Point3::from(**p) - Point3::from(*q)).norm() >= 1.5)
+        };
+        let from: Vec<&Point3m> = places
+            .iter()
+            .filter(|p| (room_of(p) == party_room) == (i % 2 == 0) && free(p, &taken))
+            .collect();
+        if from.is_empty() {
+            continue;
+        }
+        let start = *from[rng.below(from.len())];
+        let to: Vec<&Point3m> = places
+            .iter()
+            .filter(|p| room_of(p) != room_of(&start) && room_of(p) != party_room)
+            .filter(|p| free(p, &taken) && (Point3::from(**p) - Point3::from(start)).norm() >= 1.5)
+            .collect();
+        if to.is_empty() {
+            continue;
+        }
+        let goal = *to[rng.below(to.len())];
+        taken.extend([start, goal]);
+        let pair = Pair::walking(start, goal, gait.clone());
+        let run = run_pair(
+            &RoomContext::bare(scene, region),
+            &pair,
+            &[RoomPlanner::OursExact],
+            &RunSettings::default(),
+        )?
+        .pop()
+        .ok_or_else(|| RoomsError::InvalidInput("the planner ran on no pair".into()))?;
+        let reports = check_sequence(scene, &run.poses, &check)?;
+        let valid = reports.iter().filter(|r| r.valid()).count();
+        let mut passer = Guest {
+            start,
+            room: room_of(&start),
+            seat: goal,
+            valid_pct: 100.0 * valid as f64 / reports.len().max(1) as f64,
+            motion: run.poses,
+            wait: 0,
+            seated: run.outcome.reached,
+        };
+        if !passer.seated {
+            continue;
+        }
+        let step = config.wait_step.max(1);
+        let wait = (0..=config.max_wait / step).find_map(|w| {
+            passer.wait = w * step;
+            (!overlaps_any(&passer, &out)).then_some(passer.wait)
+        });
+        if let Some(w) = wait {
+            passer.wait = w;
+            out.push(passer);
+        }
+    }
+    Ok(out)
+}
+
 /// Up to `cap` orders of `items` (their permutations, in lexicographic order of positions)
 /// appended to `out`.
 fn permutations(items: &[usize], prefix: &mut Vec<usize>, out: &mut Vec<Vec<usize>>, cap: usize) {
@@ -563,9 +661,17 @@ pub fn plan_party(
         });
         plans.push(sits[k]);
     }
-    // One after another, the farthest chair from its guest first (they reach the table
-    // last), each waiting until it meets nobody placed.
-    // The order: of every order of the guests (up to 24 of them, those of the longest walks
+    // The people walking through, first, each waiting for those before.
+    let avoid: Vec<Point3m> = starts
+        .iter()
+        .map(|s| s.0)
+        .chain(plans.iter().map(|p| p.start))
+        .collect();
+    let passers = walk_through(
+        scene, region, &places, &avoid, rooms, table_room, &gait, config,
+    )?;
+    // Then the guests one after another, each waiting until it meets nobody placed. The
+    // order: of every order of the guests (up to 24 of them, those of the longest walks
     // first first), the one seating the most with waits alone, then the soonest done.
     let wait_for = |guest: &mut Guest, placed: &[Guest]| {
         let step = config.wait_step.max(1);
@@ -575,7 +681,7 @@ pub fn plan_party(
         })
     };
     let waits_only = |order: &[usize]| {
-        let mut placed: Vec<Guest> = Vec::new();
+        let mut placed: Vec<Guest> = passers.clone();
         for &k in order {
             let mut guest = guests[k].clone();
             if guest.seated && wait_for(&mut guest, &placed).is_some() {
@@ -583,7 +689,7 @@ pub fn plan_party(
             }
         }
         let end = placed.iter().map(Guest::end).max().unwrap_or(0);
-        (placed.len(), std::cmp::Reverse(end))
+        (placed.len() - passers.len(), std::cmp::Reverse(end))
     };
     let mut first: Vec<usize> = (0..guests.len()).collect();
     first.sort_by_key(|&k| std::cmp::Reverse(guests[k].motion.frames.len()));
@@ -594,7 +700,7 @@ pub fn plan_party(
         .max_by_key(|o| waits_only(o))
         .cloned()
         .unwrap_or(first);
-    let mut placed: Vec<Guest> = Vec::with_capacity(n);
+    let mut placed: Vec<Guest> = passers.clone();
     let mut left: Vec<Guest> = Vec::new();
     let mut rng = SplitMix64::new(config.seed ^ 0x5EA7);
     for k in order {
@@ -604,10 +710,10 @@ pub fn plan_party(
         } else {
             None
         };
-        if found.is_none() && !placed.is_empty() {
+        if found.is_none() && placed.len() > passers.len() {
             // Blocked for good (by someone seated on the way, say): walk again around the
             // seated, then wait.
-            let seated: Vec<Pose> = placed
+            let seated: Vec<Pose> = placed[passers.len()..]
                 .iter()
                 .map(|g| g.motion.frames[g.motion.frames.len() - 1])
                 .collect();
@@ -628,7 +734,11 @@ pub fn plan_party(
         let mut tries = 0;
         while found.is_none() && tries < RESTARTS {
             tries += 1;
-            let taken: Vec<Point3m> = guests.iter().map(|g| g.start).collect();
+            let taken: Vec<Point3m> = guests
+                .iter()
+                .chain(&passers)
+                .flat_map(|g| [g.start, g.seat])
+                .collect();
             let elsewhere: Vec<&Point3m> = places
                 .iter()
                 .filter(|p| room_of(**p) == guest.room)
@@ -682,9 +792,11 @@ pub fn plan_party(
                 .count();
         }
     }
+    let passers: Vec<Guest> = placed.drain(..passers.len()).collect();
     placed.extend(left);
     Ok(Party {
         guests: placed,
+        passers,
         chairs: sits.len(),
         at,
         frames,
