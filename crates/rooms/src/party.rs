@@ -1,10 +1,11 @@
 //! Several people sitting down together ([`plan_party`]): N people walk in from different
-//! rooms and each sits on a different chair of one dining table. Each walk is planned alone
-//! (ours on the exact field, to where the region's sit-down for that chair starts) and the
-//! sit-down played after it; then the guests go one after another, each waiting at its start
-//! until its whole motion overlaps no body already placed at any frame. A body is its bones
-//! as capsules ([`BONE_RADIUS`]); every pair of people is checked at every frame, a waiting
-//! person and a seated one included.
+//! rooms and each sits on a different chair of one dining table, or, where the region reaches
+//! too few of its chairs, on a different seat of one room. Each walk is planned alone (ours on
+//! the exact field, to where the seat's sit-down starts) and the sit-down played after it;
+//! then the guests go one after another, each waiting at its start until its whole motion
+//! overlaps no body already placed at any frame (people walking through meanwhile placed
+//! first). A body is its bones as capsules ([`BONE_RADIUS`]); every pair of people is checked
+//! at every frame, a waiting person and a seated one included.
 
 use crate::harness::{run_pair, standing_places, Pair, RoomContext, RoomPlanner, RunSettings};
 use crate::region::sit_down_to;
