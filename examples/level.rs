@@ -205,6 +205,7 @@ fn main() -> Result<()> {
         goals: Some(args.goals),
         rise: args.rise,
         sit_downs: false,
+        lie_downs: false,
         seed: args.seed,
         ..PairOptions::default()
     };

@@ -299,6 +299,12 @@ pub fn get_up(config: &SitConfig) -> Result<PoseSequence> {
 /// Lying down from sitting on the edge of a bed or sofa of `seat_height`: the torso tips back
 /// to horizontal, the legs straighten onto the surface and the body slides back along -x by
 /// `slide` metres. The body ends on its back along the x axis, head towards -x.
+///
+/// With `lift` 0 the knees straighten and the body slides together, over the whole
+/// duration: the shanks still hang when the knees come over the edge, and on a surface
+/// whose edge the hips sit near they sweep through it. With `lift` above 0 the legs come up
+/// first (straight within that share of the duration, the torso tipping back meanwhile) and
+/// the body slides back after, as a person swings the legs onto a bed before shuffling back.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LieConfig {
     /// Height of the lying surface, metres (0.3 to 0.75).
@@ -309,6 +315,10 @@ pub struct LieConfig {
     pub duration: f32,
     /// Frames per second.
     pub fps: f32,
+    /// The share of the duration (0 to below 1) in which the legs straighten before the body
+    /// slides back; 0: both over the whole duration.
+    #[serde(default)]
+    pub lift: f32,
 }
 
 impl Default for LieConfig {
@@ -318,6 +328,7 @@ impl Default for LieConfig {
             slide: 0.6,
             duration: 2.5,
             fps: 30.0,
+            lift: 0.0,
         }
     }
 }
@@ -327,14 +338,18 @@ impl Default for LieConfig {
 /// ([`Support::Sitting`]).
 ///
 /// # Errors
-/// [`AffordanceError::InvalidInput`] for a surface outside 0.3-0.75 m, a negative slide or
-/// non-positive timing.
+/// [`AffordanceError::InvalidInput`] for a surface outside 0.3-0.75 m, a negative slide,
+/// a lift outside 0 to below 1, or non-positive timing.
 pub fn lie_down(config: &LieConfig) -> Result<PoseSequence> {
     check_positive("duration", config.duration)?;
     check_positive("fps", config.fps)?;
-    if !((0.3..=0.75).contains(&config.seat_height) && (0.0..3.0).contains(&config.slide)) {
+    if !((0.3..=0.75).contains(&config.seat_height)
+        && (0.0..3.0).contains(&config.slide)
+        && (0.0..1.0).contains(&config.lift))
+    {
         return Err(AffordanceError::InvalidInput(format!(
-            "lie down: surface height 0.3-0.75 m and slide 0-3 m, got {config:?}"
+            "lie down: surface height 0.3-0.75 m, slide 0-3 m and lift 0 to below 1, got \
+             {config:?}"
         )));
     }
     let start = seated(config.seat_height);
@@ -342,25 +357,43 @@ pub fn lie_down(config: &LieConfig) -> Result<PoseSequence> {
     let mut poses = Vec::with_capacity(frames);
     let mut supports = Vec::with_capacity(frames);
     for i in 0..frames {
-        let s = smoothstep(i as f32 / (frames - 1) as f32);
+        let t = i as f32 / (frames - 1) as f32;
+        let s = smoothstep(t);
+        // The legs' progress and the slide's: together, or the legs first.
+        let (legs, back) = if config.lift > 0.0 {
+            (
+                smoothstep(t / config.lift),
+                smoothstep((t - config.lift) / (1.0 - config.lift)),
+            )
+        } else {
+            (s, s)
+        };
         let mut g = Gait {
             pitch: -FRAC_PI_2 * s,
             ..Gait::default()
         };
         for side in 0..2 {
             g.hip[side] = FRAC_PI_2;
-            g.knee[side] = start.knee[side] * (1.0 - s);
+            g.knee[side] = start.knee[side] * (1.0 - legs);
             g.shoulder[side] = start.shoulder[side] * (1.0 - s) + 0.1 * s;
             g.elbow[side] = start.elbow[side] * (1.0 - s) + 0.1 * s;
         }
         // The hips stay on the surface while the pelvis rolls back onto it; lying, the joints
         // sit 8 cm above the surface, inside the body as SMPL's do.
         g.set_hip_centre(Vector3::new(
-            -config.slide * s,
+            -config.slide * back,
             0.0,
             config.seat_height + 0.08 * s,
         ));
-        supports.push(if s > 0.999 {
+        // The head settles last: a frame a hair short of flat holds it just past the contact
+        // tolerance, so with `lift` only the last frame lies (0 keeps the labels the shipped
+        // models' training data was made with).
+        let lies = if config.lift > 0.0 {
+            i + 1 == frames
+        } else {
+            s > 0.999
+        };
+        supports.push(if lies {
             Support::Lying
         } else {
             Support::Sitting

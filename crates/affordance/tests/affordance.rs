@@ -162,6 +162,51 @@ fn lying_down_on_the_bed_ends_supported_on_the_back() {
     assert!(first.supported, "{first:?}");
 }
 
+/// Lying down with the legs lifted first ([`LieConfig::lift`]) keeps every bone out of the
+/// bed from the foot end; with the legs straightening as the body slides, the shanks still
+/// hang when the knees come over the edge and pass through the bed's side.
+#[test]
+fn lying_down_legs_first_keeps_the_shanks_out_of_the_bed() {
+    let scene = room();
+    let bones_in_bed = |lift: f32| {
+        let lie = lie_down(&LieConfig {
+            lift,
+            slide: 0.8,
+            ..LieConfig::default()
+        })
+        .unwrap();
+        lie.frames
+            .iter()
+            .zip(&lie.supports)
+            .filter(|(f, &s)| {
+                let placed = f.translated(&Vector3::new(8.9, 5.0, 0.0));
+                let rests = |s| plausible(&scene, &placed, s, &cfg()).unwrap();
+                !(rests(s) || rests(Support::Lying))
+            })
+            .count()
+    };
+    assert_eq!(bones_in_bed(0.5), 0);
+    assert!(bones_in_bed(0.0) > 0);
+    // Only the last frame lies; the lift must leave time to slide.
+    let lie = lie_down(&LieConfig {
+        lift: 0.5,
+        ..LieConfig::default()
+    })
+    .unwrap();
+    let lying = lie
+        .supports
+        .iter()
+        .filter(|&&s| s == Support::Lying)
+        .count();
+    assert_eq!(lying, 1);
+    let e = lie_down(&LieConfig {
+        lift: 1.0,
+        ..LieConfig::default()
+    })
+    .unwrap_err();
+    assert!(e.to_string().contains("lift"), "{e}");
+}
+
 #[test]
 fn walking_keeps_bones_feet_and_step_length_plausible() {
     let config = WalkConfig {

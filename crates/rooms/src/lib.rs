@@ -36,7 +36,7 @@
 //! let config = RegionConfig { voxel: 0.2, ..RegionConfig::default() };
 //! let torsos = standing_torsos(&room.scene, config.voxel)?;
 //! let region = AccessibleRegion::from_drawn(&room.scene, &torsos, &config.in_place())?;
-//! let options = PairOptions { walks: 1, min_distance: 2.0, sit_downs: false, ..PairOptions::default() };
+//! let options = PairOptions { walks: 1, min_distance: 2.0, sit_downs: false, lie_downs: false, ..PairOptions::default() };
 //! let pair = &pairs(None, &room.scene, &region, &options)?[0];
 //! let runs = run_pair(
 //!     &RoomContext::bare(&room.scene, &region),
@@ -72,8 +72,8 @@ pub use field3_store::FieldStore;
 pub use field3_train::{train_field3, Field3Config, Field3Report};
 pub use nav::{PoseFilter, SceneTables};
 pub use region::{
-    AccessibleRegion, BuildTimes, LeftOut, RegionConfig, SitDown, LEFT_OUT_LEVEL_M,
-    LEFT_OUT_NAMED_M2, LEFT_OUT_STOREY_M2,
+    AccessibleRegion, BuildTimes, LeftOut, LieDown, RegionConfig, SitDown, LEFT_OUT_LEVEL_M,
+    LEFT_OUT_NAMED_M2, LEFT_OUT_STOREY_M2, LIE_SLIDES,
 };
 pub use sampling::{draw_torsos, sample_region};
 pub use surfaces::standing_torsos;

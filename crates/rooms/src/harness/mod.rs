@@ -1,5 +1,5 @@
 //! The room navigation harness (paper Tables 3 and 4): the planners by name
-//! ([`RoomPlanner`]), the walking and sit-down pairs ([`pairs()`]), one run of every planner on
+//! ([`RoomPlanner`]), the walking, sit-down and lie-down pairs ([`pairs()`]), one run of every planner on
 //! a pair with its poses fitted and checked ([`run_pair`], [`fit`]). `room_nav`, `level` and the
 //! `room_planning` bench all run it; [`crate::tables`] sums it up.
 //!
@@ -13,7 +13,7 @@ mod planner;
 mod run;
 mod scoring;
 
-pub use pairs::{pairs, standing_places, Pair, PairKind, PairOptions, SEAT_APART};
+pub use pairs::{pairs, standing_places, Pair, PairKind, PairOptions, LIE_APART, SEAT_APART};
 pub use planner::{
     learned_table, FieldKind, FloorPlanner, PairSetup, RoomPlanner, EXACT_BAND, NEAR_STALL,
     PIN_RADIUS,

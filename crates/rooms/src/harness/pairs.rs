@@ -1,10 +1,13 @@
 //! The pairs every planner is run on: walks between standing places of the region (half of
 //! them from one room to another where the scene's rooms are known), and a sit-down at every
-//! seat the region's sit-downs reach. One generator with
+//! seat the region's sit-downs reach, and a lie-down at every bed or sofa its lie-downs reach.
+//! One generator with
 //! options serves `room_nav`, the `room_planning` bench and `level`.
 
-use crate::{AccessibleRegion, ExactField3, Result, RoomsError, SitDown};
-use envfield_affordance::{afford, sit_on, FilterConfig, PoseSequence, Support, WalkConfig};
+use crate::{AccessibleRegion, ExactField3, LieDown, Result, RoomsError, SitDown};
+use envfield_affordance::{
+    afford, lie_on, sit_on, FilterConfig, PoseSequence, Support, WalkConfig,
+};
 use envfield_grid::{ContinuousField3, Point3m, SplitMix64};
 use envfield_scene::nalgebra::Point3;
 use envfield_scene::{Room, Scene};
@@ -16,6 +19,9 @@ pub enum PairKind {
     Walk,
     /// Sitting down: from where the sit-down starts in front of a seat to seated.
     Sit,
+    /// Lying down: from standing beside a bed or sofa, through sitting on its edge, to lying
+    /// on it.
+    Lie,
 }
 
 impl PairKind {
@@ -24,6 +30,7 @@ impl PairKind {
         match self {
             PairKind::Walk => "walk",
             PairKind::Sit => "sit",
+            PairKind::Lie => "lie",
         }
     }
 }
@@ -37,7 +44,7 @@ pub struct Pair {
     pub goal: Point3m,
     /// The poses: a gait repeated along the path, or a sit-down played once.
     pub sequence: PoseSequence,
-    /// Whether the sequence repeats (a walk) or plays once (a sit-down).
+    /// Whether the sequence repeats (a walk) or plays once (a sit-down, a lie-down).
     pub repeat: bool,
     /// What the pair is.
     pub kind: PairKind,
@@ -69,6 +76,21 @@ impl Pair {
             kind: PairKind::Sit,
         })
     }
+
+    /// The pair a region's lie-down makes: from its standing start to lying, its poses
+    /// (sitting down, then lying down) played once.
+    ///
+    /// # Errors
+    /// As [`LieDown::sequence`].
+    pub fn lying_down(lie: &LieDown) -> Result<Self> {
+        Ok(Self {
+            start: lie.sit.start,
+            goal: lie.lying,
+            sequence: lie.sequence()?,
+            repeat: false,
+            kind: PairKind::Lie,
+        })
+    }
 }
 
 /// How [`pairs`] draws its pairs. The default is `room_nav`'s: 4 walks, each start and goal
@@ -91,6 +113,10 @@ pub struct PairOptions<'a> {
     /// room's known furniture, or, in a scene without a furniture list, every place the
     /// region's sit-downs end (those within [`SEAT_APART`] of each other one seat).
     pub sit_downs: bool,
+    /// Add a lie-down pair at every bed or sofa the region's lie-downs reach: every bed and
+    /// sofa of the room's known furniture, or, in a scene without a furniture list, every
+    /// place the region's lie-downs end (those within [`LIE_APART`] of each other one bed's).
+    pub lie_downs: bool,
     /// The scene's rooms (`[x_min, y_min, x_max, y_max]`, an apartment's): half of the walks
     /// start in one and end in another. Empty: walks are drawn anywhere.
     pub rooms: &'a [[f32; 4]],
@@ -106,6 +132,7 @@ impl Default for PairOptions<'_> {
             goals: None,
             rise: 0.0,
             sit_downs: true,
+            lie_downs: true,
             rooms: &[],
             seed: 0,
         }
@@ -115,6 +142,11 @@ impl Default for PairOptions<'_> {
 /// Sit-downs of a scene without a furniture list that end within this of each other (metres,
 /// seated torsos) are one seat's.
 pub const SEAT_APART: f32 = 0.45;
+
+/// Lie-downs of a scene without a furniture list that end within this of each other (metres,
+/// lying torsos) are one bed's: two people lie side by side on a double bed closer than this,
+/// and one body's lying places on a bed's length lie within it.
+pub const LIE_APART: f32 = 1.0;
 
 /// Whether a standing pose with its torso at `p` is supported and collision-free.
 fn stands(scene: &Scene, p: Point3m) -> bool {
@@ -137,7 +169,9 @@ pub fn standing_places(scene: &Scene, region: &AccessibleRegion) -> Vec<Point3m>
 /// drawn as `options` says, then, for a `room` with known furniture and
 /// [`PairOptions::sit_downs`], a sit-down pair at every seat the region's sit-downs reach
 /// ([`AccessibleRegion::sit_downs`]): of those ending over the seat, the one ending nearest
-/// the middle of its seat, from its standing start to seated. Seeded.
+/// the middle of its seat, from its standing start to seated; then, with
+/// [`PairOptions::lie_downs`], a lie-down pair at every bed and sofa the region's lie-downs
+/// reach ([`AccessibleRegion::lie_downs`]) likewise. Seeded.
 ///
 /// # Errors
 /// [`RoomsError::InvalidInput`] when walks are asked for and the region holds fewer than two
@@ -165,6 +199,12 @@ pub fn pairs(
         out.extend(match room {
             Some(room) => sit_down_pairs(room, region)?,
             None => seat_pairs(region)?,
+        });
+    }
+    if options.lie_downs {
+        out.extend(match room {
+            Some(room) => lie_down_pairs(room, region)?,
+            None => bed_pairs(region)?,
         });
     }
     Ok(out)
@@ -305,6 +345,47 @@ fn seat_pairs(region: &AccessibleRegion) -> Result<Vec<Pair>> {
         }
         taken.push(sit.seated);
         out.push(Pair::sitting_down(sit)?);
+    }
+    Ok(out)
+}
+
+/// A lie-down pair at every bed and sofa of `room` the region's lie-downs reach: of those
+/// ending over the piece, the one ending nearest where a body lies down on it from its front
+/// ([`lie_on`]).
+fn lie_down_pairs(room: &Room, region: &AccessibleRegion) -> Result<Vec<Pair>> {
+    let mut out = Vec::new();
+    for f in &room.furniture {
+        let Some(middle) = lie_on(f)?.and_then(|s| s.frames.last().map(|p| p.torso())) else {
+            continue;
+        };
+        let nearest = region
+            .lie_downs
+            .iter()
+            .filter(|l| f.covers(l.lying[0], l.lying[1]))
+            .min_by(|a, b| {
+                let d = |l: &&LieDown| (Point3::from(l.lying) - middle).norm();
+                d(a).total_cmp(&d(b))
+            });
+        if let Some(lie) = nearest {
+            out.push(Pair::lying_down(lie)?);
+        }
+    }
+    Ok(out)
+}
+
+/// A lie-down pair at every bed the region's lie-downs reach in a scene without a furniture
+/// list: the lie-downs in the order found, each ending farther than [`LIE_APART`] from every
+/// one taken before.
+fn bed_pairs(region: &AccessibleRegion) -> Result<Vec<Pair>> {
+    let mut taken: Vec<Point3<f32>> = Vec::new();
+    let mut out = Vec::new();
+    for lie in &region.lie_downs {
+        let p = Point3::from(lie.lying);
+        if taken.iter().any(|t| (t - p).norm() <= LIE_APART) {
+            continue;
+        }
+        taken.push(p);
+        out.push(Pair::lying_down(lie)?);
     }
     Ok(out)
 }

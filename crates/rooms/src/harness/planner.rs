@@ -286,9 +286,9 @@ impl<'a> PairSetup<'a> {
                 // Nothing between the legs is a walk's check: a sit-down lowers the pelvis
                 // over the seat while its feet still bear the body.
                 clear_beneath: pair.kind == PairKind::Walk,
-                // A sit-down is made for its seat, where it is played: its poses follow where
-                // the torso is.
-                in_place: pair.kind == PairKind::Sit,
+                // A sit-down is made for its seat (a lie-down for its bed), where it is
+                // played: its poses follow where the torso is.
+                in_place: pair.kind != PairKind::Walk,
                 tables,
             },
             search: {

@@ -20,8 +20,8 @@ pub struct RunSettings {
     /// them ours falls back to the region alone. A learned field's hollow takes many
     /// expansions to fill: at 5, 2-3% of the walks stopped in one.
     pub budget: f64,
-    /// The same for a sit-down pair: its steps must match the sequence's frames to the seat,
-    /// which takes search too.
+    /// The same for a sit-down or lie-down pair: its steps must match the sequence's frames
+    /// to the seat or bed, which takes search too.
     pub sit_budget: f64,
     /// RRT*'s second budget (`rrtstar_big`).
     pub big_budget: usize,
@@ -55,7 +55,7 @@ impl RunSettings {
     pub fn budget_for(&self, kind: PairKind) -> f64 {
         match kind {
             PairKind::Walk => self.budget,
-            PairKind::Sit => self.sit_budget,
+            PairKind::Sit | PairKind::Lie => self.sit_budget,
         }
     }
 }

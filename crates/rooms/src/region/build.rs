@@ -1,9 +1,9 @@
 //! How a region is built from kept torso samples, step by step: the lattice, the samples'
 //! voxels, the gaps between them closed, the sit-downs laid in, the largest connected set.
 
-use super::{AccessibleRegion, BuildTimes, LeftOut, SitDown};
+use super::{AccessibleRegion, BuildTimes, LeftOut, LieDown, SitDown};
 use crate::{Result, RoomsError};
-use envfield_affordance::Pose;
+use envfield_affordance::{Pose, PoseSequence};
 use envfield_grid::Point3m;
 use envfield_grid::{Cell3, Grid3};
 use envfield_scene::nalgebra::Point3;
@@ -62,17 +62,27 @@ impl<'a> Voxels<'a> {
     }
 }
 
+/// The sit-downs and lie-downs whose torsos join voxels a region's samples left apart.
+pub(super) struct Links {
+    /// Sit-downs from the floor onto seats.
+    pub sit_downs: Vec<SitDown>,
+    /// Lie-downs from the edge of a bed or sofa onto its length.
+    pub lie_downs: Vec<LieDown>,
+    /// Milliseconds the lie-downs took (apart from the sit-downs').
+    pub lie_downs_ms: f64,
+}
+
 /// Builds the region of `kept` (see [`AccessibleRegion::from_kept`]): each face neighbour of a
 /// sample's voxel joins when `joins` says so of its centre (asked once, for all of them), and
-/// the voxels along the torsos of each sit-down `links` gives (for the lattice, the voxels so
-/// far and the samples) join too, before the largest connected set is kept; the sit-downs
-/// that end in it are the region's.
+/// the voxels along the torsos of each sit-down and lie-down `links` gives (for the lattice,
+/// the voxels so far and the samples) join too, before the largest connected set is kept; the
+/// sit-downs that end in it and the lie-downs that start and end in it are the region's.
 pub(super) fn build(
     scene: &Scene,
     kept: Vec<Point3m>,
     voxel: f32,
     joins: impl FnOnce(&[Point3m]) -> Result<Vec<bool>>,
-    links: impl FnOnce(&VoxelFrame, &Grid3, &[Point3m]) -> Result<Vec<SitDown>>,
+    links: impl FnOnce(&VoxelFrame, &Grid3, &[Point3m]) -> Result<Links>,
 ) -> Result<AccessibleRegion> {
     if kept.is_empty() {
         return Err(RoomsError::InvalidInput(
@@ -95,11 +105,19 @@ pub(super) fn build(
     close_gaps(&mut voxels, &kept, joins)?;
     times.gaps_ms = ms(start);
     let start = Instant::now();
-    let sit_downs = links(&frame, &voxels.grid()?, &kept)?;
+    let Links {
+        sit_downs,
+        lie_downs,
+        lie_downs_ms,
+    } = links(&frame, &voxels.grid()?, &kept)?;
     for sit in &sit_downs {
-        lay_sit_down(&mut voxels, sit, voxel)?;
+        lay_torsos(&mut voxels, &sit.sequence()?, voxel);
     }
-    times.sit_downs_ms = ms(start);
+    for lie in &lie_downs {
+        lay_torsos(&mut voxels, &lie.lying_down()?, voxel);
+    }
+    times.sit_downs_ms = ms(start) - lie_downs_ms;
+    times.lie_downs_ms = lie_downs_ms;
     let start = Instant::now();
     let (grid, components, left_out) = largest_set(&voxels)?;
     let mut region = AccessibleRegion::new(frame, grid, kept, components)?;
@@ -107,6 +125,10 @@ pub(super) fn build(
     region.sit_downs = sit_downs
         .into_iter()
         .filter(|s| region.contains(s.seated))
+        .collect();
+    region.lie_downs = lie_downs
+        .into_iter()
+        .filter(|l| region.contains(l.sit.seated) && region.contains(l.lying))
         .collect();
     times.voxels_ms += ms(start);
     region.times = times;
@@ -167,10 +189,10 @@ fn close_gaps(
     Ok(())
 }
 
-/// Turns on the voxels along a sit-down's torsos, in steps of at most half a voxel so that
-/// the chain's voxels touch.
-fn lay_sit_down(voxels: &mut Voxels<'_>, sit: &SitDown, voxel: f32) -> Result<()> {
-    let chain: Vec<Point3<f32>> = sit.sequence()?.frames.iter().map(Pose::torso).collect();
+/// Turns on the voxels along a sequence's torsos (a sit-down's, a lie-down's), in steps of at
+/// most half a voxel so that the chain's voxels touch.
+fn lay_torsos(voxels: &mut Voxels<'_>, seq: &PoseSequence, voxel: f32) {
+    let chain: Vec<Point3<f32>> = seq.frames.iter().map(Pose::torso).collect();
     for pair in chain.windows(2) {
         let (a, b) = (pair[0], pair[1]);
         let steps = ((b - a).norm() / (0.5 * voxel)).ceil().max(1.0) as usize;
@@ -178,7 +200,6 @@ fn lay_sit_down(voxels: &mut Voxels<'_>, sit: &SitDown, voxel: f32) -> Result<()
             voxels.set(&(a + (b - a) * (k as f32 / steps as f32)));
         }
     }
-    Ok(())
 }
 
 /// The largest 26-connected set of the voxels that are on, how many sets there were, and the

@@ -5,17 +5,20 @@
 //! The build, step by step (`build`): a lattice over the scene and the samples; each kept
 //! sample's voxel; the gaps between them closed through face neighbours whose centres pass
 //! the filter too, so the region does not spill over a table's edge; the sit-downs that join
-//! a seat's voxels to the floor's ([`SitDown`], every pose valid and plausible); the largest
-//! 26-connected set. [`crate::quality`] judges the result.
+//! a seat's voxels to the floor's ([`SitDown`], every pose valid and plausible); the
+//! lie-downs from those sit-downs onto the length of a bed or sofa ([`LieDown`], the same);
+//! the largest 26-connected set. [`crate::quality`] judges the result.
 
 mod bridges;
 mod build;
 mod config;
+mod lie;
 mod write;
 
 pub(crate) use bridges::sit_down_to;
 pub use bridges::SitDown;
 pub use config::RegionConfig;
+pub use lie::{LieDown, LIE_SLIDES};
 
 use crate::{Result, RoomsError};
 use envfield_affordance::{afford_all, Afford};
@@ -36,6 +39,9 @@ pub struct BuildTimes {
     pub gaps_ms: f64,
     /// The sit-downs that join seats to the floor.
     pub sit_downs_ms: f64,
+    /// The lie-downs from the sit-downs onto beds and sofas.
+    #[serde(default)]
+    pub lie_downs_ms: f64,
     /// The lattice, the samples' voxels and the largest set.
     pub voxels_ms: f64,
 }
@@ -86,6 +92,9 @@ pub struct AccessibleRegion {
     /// The sit-downs that joined seats to the floor's set ([`AccessibleRegion::from_kept`]),
     /// each ending seated in the region.
     pub sit_downs: Vec<SitDown>,
+    /// The lie-downs from its sit-downs onto the length of a bed or sofa
+    /// ([`AccessibleRegion::from_kept`]), each starting and ending in the region.
+    pub lie_downs: Vec<LieDown>,
     /// How long each step of its build took.
     pub times: BuildTimes,
     /// The accessible voxels' indices, made on first use.
@@ -125,6 +134,7 @@ impl AccessibleRegion {
             components,
             left_out: Vec::new(),
             sit_downs: Vec::new(),
+            lie_downs: Vec::new(),
             times: BuildTimes::default(),
             free: std::sync::OnceLock::new(),
             cells: std::sync::OnceLock::new(),
@@ -201,7 +211,16 @@ impl AccessibleRegion {
                     .map(Afford::kept)
                     .collect())
             },
-            |frame, all, kept| bridges::sit_down_bridges(scene, frame, all, kept, config),
+            |frame, all, kept| {
+                let sit_downs = bridges::sit_down_bridges(scene, frame, all, kept, config)?;
+                let start = std::time::Instant::now();
+                let lie_downs = lie::lie_downs(scene, &sit_downs, config)?;
+                Ok(build::Links {
+                    sit_downs,
+                    lie_downs,
+                    lie_downs_ms: start.elapsed().as_secs_f64() * 1e3,
+                })
+            },
         )
     }
 
@@ -216,7 +235,13 @@ impl AccessibleRegion {
             kept,
             voxel,
             |centres| Ok(vec![true; centres.len()]),
-            |_, _, _| Ok(Vec::new()),
+            |_, _, _| {
+                Ok(build::Links {
+                    sit_downs: Vec::new(),
+                    lie_downs: Vec::new(),
+                    lie_downs_ms: 0.0,
+                })
+            },
         )
     }
 
