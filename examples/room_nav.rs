@@ -267,6 +267,13 @@ fn main() -> Result<()> {
         let t = Instant::now();
         let region = sample_region(&vae, &scene, args.samples, seed)?;
         region_s.push(t.elapsed().as_secs_f64());
+        eprintln!(
+            "room {seed}: region of {} voxels, {} sit-downs, {} lie-downs, {:.1} s",
+            region.free_indices().len(),
+            region.sit_downs.len(),
+            region.lie_downs.len(),
+            t.elapsed().as_secs_f64()
+        );
         if let Some(w) = region.left_out_warning() {
             eprintln!("warning: room {seed}: {w}");
         }

@@ -63,8 +63,8 @@ class Scene:
         return self._native.warnings
 
     def region(self, samples=None, seed=0, vae=None):
-        """Where people can be: a ``Region`` of voxels (``points``, ``voxel``, ``sit_downs``)
-        whose ``walk`` and ``sit_down`` plan motions. ``samples`` torsos are drawn (by default
+        """Where people can be: a ``Region`` of voxels (``points``, ``voxel``, ``sit_downs``,
+        ``lie_downs``) whose ``walk``, ``sit_down`` and ``lie_down`` plan motions. ``samples`` torsos are drawn (by default
         240 per square metre of the scene's box) by the VAE in ``vae`` (the shipped one by
         default). Takes seconds to a minute; the GIL is released meanwhile."""
         vae = DEFAULT_VAE if vae is None else os.fspath(vae)

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Plans a walk and a sit-down in a room from Python and saves every pose as .npz.
+"""Plans a walk, a sit-down and a lie-down in a room from Python and saves every pose as .npz.
 
     python3 python/examples/walk_and_sit.py                       # a generated room
     python3 python/examples/walk_and_sit.py --scene room.glb      # your own scene (OBJ, PLY, glTF)
@@ -9,7 +9,8 @@ A room furnished with real furniture (Sweet Home 3D's catalogue, GPL, fetched):
     bash scripts/fetch_sweethome3d.sh
     cargo run --release --example accessible -- --catalogue --seed 20000 --no-field --out out/cat
 
-The .npz holds, for the walk and the sit-down: ``<kind>_path`` (steps, 3) torso locations,
+The .npz holds, for the walk, the sit-down and the lie-down (where the region has a bed or sofa
+a body lies on): ``<kind>_path`` (steps, 3) torso locations,
 ``<kind>_poses`` (frames, 22, 3) joints in metres, ``<kind>_supported`` and
 ``<kind>_collision_free`` (frames,) per-pose checks against the scene, and ``joints``.
 """
@@ -40,8 +41,9 @@ def main():
         scene = rooms.Scene.generated(seed=args.seed)
     t = time.perf_counter()
     region = scene.region(seed=args.seed)
-    print("region: %d voxels of %.2f m, %d sit-downs, %.1f s"
-          % (len(region.points), region.voxel, len(region.sit_downs), time.perf_counter() - t))
+    print("region: %d voxels of %.2f m, %d sit-downs, %d lie-downs, %.1f s"
+          % (len(region.points), region.voxel, len(region.sit_downs), len(region.lie_downs),
+             time.perf_counter() - t))
 
     # A walk between the two standing places farthest apart across the floor (torsos in the
     # lowest layer of the region, at standing height).
@@ -54,6 +56,10 @@ def main():
         plans["sit"] = region.sit_down(0, planner=args.planner, seed=args.seed)
     else:
         print("no seat in this scene's region: no sit-down planned")
+    if region.lie_downs:
+        plans["lie"] = region.lie_down(0, planner=args.planner, seed=args.seed)
+    else:
+        print("no bed or sofa a body lies on in this scene's region: no lie-down planned")
 
     arrays = {"joints": np.array(rooms.JOINTS)}
     for kind, plan in plans.items():

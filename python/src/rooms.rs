@@ -182,6 +182,17 @@ impl PyRegion {
             .collect()
     }
 
+    /// The region's lie-downs, each from a sit-down onto the edge of a bed or sofa to lying
+    /// on it, as `(start, lying)` torso locations in metres.
+    #[getter]
+    fn lie_downs(&self) -> Vec<([f32; 3], [f32; 3])> {
+        self.region
+            .lie_downs
+            .iter()
+            .map(|l| (l.sit.start, l.lying))
+            .collect()
+    }
+
     /// A walk from `start` to `goal` (standing torso locations in the region, metres) by
     /// `planner` (`room_nav`'s names: "ours_exact", "rrt", "rrtstar", "prm", "line",
     /// "navmesh"; the learned-field planners need a trained field and are not offered here).
@@ -215,6 +226,26 @@ impl PyRegion {
             ))
         })?;
         let pair = Pair::sitting_down(sit).map_err(value_error)?;
+        self.plan(py, pair, planner, seed)
+    }
+
+    /// Lying down by the region's lie-down number `index` (see `lie_downs`): from standing
+    /// beside the bed or sofa, sitting on its edge, to lying on it.
+    #[pyo3(signature = (index, planner="ours_exact", seed=0))]
+    fn lie_down(
+        &mut self,
+        py: Python<'_>,
+        index: usize,
+        planner: &str,
+        seed: u64,
+    ) -> PyResult<PyPlan> {
+        let n = self.region.lie_downs.len();
+        let lie = self.region.lie_downs.get(index).ok_or_else(|| {
+            PyValueError::new_err(format!(
+                "lie-down {index} asked for; the region has {n} (numbered from 0)"
+            ))
+        })?;
+        let pair = Pair::lying_down(lie).map_err(value_error)?;
         self.plan(py, pair, planner, seed)
     }
 }

@@ -225,12 +225,16 @@ impl Default for SitConfig {
 
 /// The angles of a seated body whose hips rest at `seat_height` with the feet on the floor.
 fn seated(seat_height: f32) -> Gait {
-    // Thighs level; the shank reaches forward and down to the floor.
-    let drop = (seat_height - ANKLE_HEIGHT).clamp(0.0, SHANK);
+    // Thighs level; the shank reaches forward and down to the floor. On a seat higher than
+    // the shank is long (a bed's 0.55-0.75 m) the shank stands upright and the thighs slope
+    // down from the hips to the knees, so the hips still rest on the seat.
+    let reach = seat_height - ANKLE_HEIGHT;
+    let drop = reach.clamp(0.0, SHANK);
     let shank = (drop / SHANK).acos();
+    let tilt = ((reach - SHANK).max(0.0) / THIGH).min(1.0).asin();
     Gait {
-        hip: [FRAC_PI_2; 2],
-        knee: [FRAC_PI_2 - shank; 2],
+        hip: [FRAC_PI_2 - tilt; 2],
+        knee: [FRAC_PI_2 - tilt - shank; 2],
         shoulder: [0.35; 2],
         elbow: [0.9; 2],
         ..Gait::default()
@@ -319,6 +323,12 @@ pub struct LieConfig {
     /// slides back; 0: both over the whole duration.
     #[serde(default)]
     pub lift: f32,
+    /// How far the body turns about the vertical through the seated hips as the legs come up,
+    /// radians (+ turns the legs to the left, -pi to pi): 0 lies straight back from the edge
+    /// (a bed's foot end); a quarter turn swings the legs onto a bed or sofa from its side and
+    /// lies along it.
+    #[serde(default)]
+    pub turn: f32,
 }
 
 impl Default for LieConfig {
@@ -329,6 +339,7 @@ impl Default for LieConfig {
             duration: 2.5,
             fps: 30.0,
             lift: 0.0,
+            turn: 0.0,
         }
     }
 }
@@ -345,11 +356,12 @@ pub fn lie_down(config: &LieConfig) -> Result<PoseSequence> {
     check_positive("fps", config.fps)?;
     if !((0.3..=0.75).contains(&config.seat_height)
         && (0.0..3.0).contains(&config.slide)
-        && (0.0..1.0).contains(&config.lift))
+        && (0.0..1.0).contains(&config.lift)
+        && (-PI..=PI).contains(&config.turn))
     {
         return Err(AffordanceError::InvalidInput(format!(
-            "lie down: surface height 0.3-0.75 m, slide 0-3 m and lift 0 to below 1, got \
-             {config:?}"
+            "lie down: surface height 0.3-0.75 m, slide 0-3 m, lift 0 to below 1 and turn \
+             -pi to pi, got {config:?}"
         )));
     }
     let start = seated(config.seat_height);
@@ -373,7 +385,7 @@ pub fn lie_down(config: &LieConfig) -> Result<PoseSequence> {
             ..Gait::default()
         };
         for side in 0..2 {
-            g.hip[side] = FRAC_PI_2;
+            g.hip[side] = start.hip[side] * (1.0 - legs) + FRAC_PI_2 * legs;
             g.knee[side] = start.knee[side] * (1.0 - legs);
             g.shoulder[side] = start.shoulder[side] * (1.0 - s) + 0.1 * s;
             g.elbow[side] = start.elbow[side] * (1.0 - s) + 0.1 * s;
@@ -398,7 +410,13 @@ pub fn lie_down(config: &LieConfig) -> Result<PoseSequence> {
         } else {
             Support::Sitting
         });
-        poses.push(g.pose());
+        // The turn swings the legs round with them, about the seated hips (the origin).
+        let pose = g.pose();
+        poses.push(if config.turn == 0.0 {
+            pose
+        } else {
+            pose.rotated_about_z(config.turn * legs, &Point3::origin())
+        });
     }
     PoseSequence::new(config.fps, Activity::LieDown, poses, supports)
 }

@@ -162,6 +162,28 @@ fn lying_down_on_the_bed_ends_supported_on_the_back() {
     assert!(first.supported, "{first:?}");
 }
 
+/// Sitting down on a seat higher than the shank is long (a bed's edge) ends with the hips on
+/// the seat and the soles on the floor: the thighs slope down to the knees.
+#[test]
+fn sitting_on_a_high_seat_ends_with_the_hips_on_it() {
+    for h in [0.35f32, 0.45, 0.5, 0.55, 0.65, 0.75] {
+        let sit = sit_down(&SitConfig {
+            seat_height: h,
+            ..SitConfig::default()
+        })
+        .unwrap();
+        let last = sit.frames.last().unwrap();
+        let hips = (last.joint(Joint::LeftHip).z + last.joint(Joint::RightHip).z) / 2.0;
+        assert!((hips - h).abs() < 0.01, "seat {h}: hips at {hips}");
+        let ankle = last.joint(Joint::LeftAnkle).z;
+        assert!(
+            (ankle - sit.frames[0].joint(Joint::LeftAnkle).z).abs() < 0.01,
+            "seat {h}"
+        );
+        assert!(last.joint(Joint::LeftKnee).z <= hips + 1e-3, "seat {h}");
+    }
+}
+
 /// Lying down with the legs lifted first ([`LieConfig::lift`]) keeps every bone out of the
 /// bed from the foot end; with the legs straightening as the body slides, the shanks still
 /// hang when the knees come over the edge and pass through the bed's side.

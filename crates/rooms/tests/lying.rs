@@ -84,8 +84,15 @@ fn region_of(room: &Room) -> AccessibleRegion {
 
 #[test]
 fn a_bed_is_lain_on_from_standing_beside_it() {
-    // A 2 m long, 1.4 m wide bed, 0.5 m high.
-    let room = room_with(ObjectKind::Bed, [2.0, 1.4, 0.5]);
+    // A 2 m long, 1.4 m wide bed, as high as a generated room's (0.5 m) and higher than the
+    // shank is long (0.62 m: the thighs slope down over its edge).
+    for h in [0.5, 0.62] {
+        lain_on(h);
+    }
+}
+
+fn lain_on(h: f32) {
+    let room = room_with(ObjectKind::Bed, [2.0, 1.4, h]);
     let region = region_of(&room);
     let config = RegionConfig::default();
     assert!(!region.lie_downs.is_empty(), "a bed gives lie-downs");
@@ -107,7 +114,7 @@ fn a_bed_is_lain_on_from_standing_beside_it() {
             last.joint(envfield_affordance::Joint::Pelvis),
         );
         assert!((head.z - pelvis.z).abs() < 0.1, "{head} {pelvis}");
-        assert!((pelvis.z - 0.5).abs() < 0.15, "{pelvis}");
+        assert!((pelvis.z - h).abs() < 0.15, "{pelvis}");
         // Every pose valid, and plausible as its support or lying.
         for (k, (pose, &support)) in seq.frames.iter().zip(&seq.supports).enumerate() {
             let a = &config.filter.affordance;
@@ -169,8 +176,7 @@ fn a_chair_gives_no_lie_down() {
 /// ends, so the two join without a jump.
 #[test]
 fn lying_down_begins_where_sitting_down_ends() {
-    // Seats the legs reach from the floor (a higher one leaves the sit-down's hips where the legs end).
-    for h in [0.35, 0.45, 0.5] {
+    for h in [0.35, 0.45, 0.5, 0.6, 0.7] {
         let sit = sit_down(&SitConfig {
             seat_height: h,
             ..SitConfig::default()

@@ -114,7 +114,7 @@ pub(super) fn build(
         lay_torsos(&mut voxels, &sit.sequence()?, voxel);
     }
     for lie in &lie_downs {
-        lay_torsos(&mut voxels, &lie.lying_down()?, voxel);
+        lay_torsos(&mut voxels, &lie.sequence()?, voxel);
     }
     times.sit_downs_ms = ms(start) - lie_downs_ms;
     times.lie_downs_ms = lie_downs_ms;

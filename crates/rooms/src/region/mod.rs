@@ -18,7 +18,7 @@ mod write;
 pub(crate) use bridges::sit_down_to;
 pub use bridges::SitDown;
 pub use config::RegionConfig;
-pub use lie::{LieDown, LIE_SLIDES};
+pub use lie::{LieDown, LIE_LIFT, LIE_ROOM, LIE_SLIDES, LIE_TURNS};
 
 use crate::{Result, RoomsError};
 use envfield_affordance::{afford_all, Afford};
@@ -211,16 +211,7 @@ impl AccessibleRegion {
                     .map(Afford::kept)
                     .collect())
             },
-            |frame, all, kept| {
-                let sit_downs = bridges::sit_down_bridges(scene, frame, all, kept, config)?;
-                let start = std::time::Instant::now();
-                let lie_downs = lie::lie_downs(scene, &sit_downs, config)?;
-                Ok(build::Links {
-                    sit_downs,
-                    lie_downs,
-                    lie_downs_ms: start.elapsed().as_secs_f64() * 1e3,
-                })
-            },
+            |frame, all, kept| bridges::links(scene, frame, all, kept, config),
         )
     }
 
