@@ -18,6 +18,10 @@ const HIP_HALF_WIDTH: f32 = 0.09;
 const THIGH: f32 = 0.40;
 const SHANK: f32 = 0.42;
 const ANKLE_HEIGHT: f32 = 0.08;
+/// How far the straight legs are raised above level as they swing round onto a bed or sofa
+/// ([`LieConfig::turn`]), radians at the middle of the swing: 20 degrees lift the feet about
+/// 0.3 m, clear of the surface they swing over.
+const SWING_RAISE: f32 = 0.35;
 const UPPER_ARM: f32 = 0.27;
 const FOREARM: f32 = 0.25;
 
@@ -371,21 +375,38 @@ pub fn lie_down(config: &LieConfig) -> Result<PoseSequence> {
     for i in 0..frames {
         let t = i as f32 / (frames - 1) as f32;
         let s = smoothstep(t);
-        // The legs' progress and the slide's: together, or the legs first.
+        // The legs' progress and the slide's: together, or the legs first. With a turn the
+        // legs straighten in the first half of the lift and swing round, raised clear of the
+        // surface, in the second.
         let (legs, back) = if config.lift > 0.0 {
+            let legs_span = if config.turn == 0.0 {
+                config.lift
+            } else {
+                config.lift / 2.0
+            };
             (
-                smoothstep(t / config.lift),
+                smoothstep(t / legs_span),
                 smoothstep((t - config.lift) / (1.0 - config.lift)),
             )
         } else {
             (s, s)
+        };
+        let swing = if config.lift > 0.0 {
+            smoothstep((t - config.lift / 2.0) / (config.lift / 2.0))
+        } else {
+            legs
+        };
+        let raise = if config.turn == 0.0 {
+            0.0
+        } else {
+            SWING_RAISE * (PI * swing).sin()
         };
         let mut g = Gait {
             pitch: -FRAC_PI_2 * s,
             ..Gait::default()
         };
         for side in 0..2 {
-            g.hip[side] = start.hip[side] * (1.0 - legs) + FRAC_PI_2 * legs;
+            g.hip[side] = start.hip[side] * (1.0 - legs) + FRAC_PI_2 * legs + raise;
             g.knee[side] = start.knee[side] * (1.0 - legs);
             g.shoulder[side] = start.shoulder[side] * (1.0 - s) + 0.1 * s;
             g.elbow[side] = start.elbow[side] * (1.0 - s) + 0.1 * s;
@@ -415,7 +436,7 @@ pub fn lie_down(config: &LieConfig) -> Result<PoseSequence> {
         poses.push(if config.turn == 0.0 {
             pose
         } else {
-            pose.rotated_about_z(config.turn * legs, &Point3::origin())
+            pose.rotated_about_z(config.turn * swing, &Point3::origin())
         });
     }
     PoseSequence::new(config.fps, Activity::LieDown, poses, supports)

@@ -197,3 +197,52 @@ fn lying_down_begins_where_sitting_down_ends() {
         assert!(worst < 0.01, "seat {h}: {worst} m apart");
     }
 }
+
+/// Ours on the exact field plans a lie-down pair to the end: from standing beside the bed to
+/// lying on it, every pose along its path valid.
+#[test]
+fn ours_plans_a_lie_down_to_the_end() {
+    // A bed lain on straight back from its edge, and a 0.8 m deep daybed lain along: the
+    // legs swung up with a quarter turn.
+    for size in [[2.0, 1.4, 0.5], [2.1, 0.8, 0.45]] {
+        plans_to_the_end(size);
+    }
+}
+
+fn plans_to_the_end(size: [f32; 3]) {
+    use envfield_rooms::harness::{run_pair, RoomContext, RoomPlanner, RunSettings};
+    let room = room_with(ObjectKind::Bed, size);
+    let region = region_of(&room);
+    let options = PairOptions {
+        walks: 0,
+        ..PairOptions::default()
+    };
+    let pair = pairs(Some(&room), &room.scene, &region, &options)
+        .unwrap()
+        .into_iter()
+        .find(|p| p.kind == PairKind::Lie)
+        .expect("a lie-down pair");
+    if size[1] < 1.0 {
+        // Too narrow to lie across: sat on from its long side, a lie-down turns to lie along
+        // it (from its short end it lies straight back).
+        assert!(region.lie_downs.iter().any(|l| l.turn != 0.0));
+        for l in &region.lie_downs {
+            let across = (l.sit.yaw + l.turn).sin().abs();
+            assert!(across < 0.1, "it lies along the daybed: {l:?}");
+        }
+    }
+    let context = RoomContext::bare(&room.scene, &region);
+    let runs = run_pair(
+        &context,
+        &pair,
+        &[RoomPlanner::OursExact],
+        &RunSettings::default(),
+    )
+    .unwrap();
+    let o = &runs[0].outcome;
+    assert!(o.reached && !o.relaxed, "{o:?}");
+    assert!(o.poses.valid > 95.0, "{o:?}");
+    let last = runs[0].poses.frames.last().unwrap();
+    assert_eq!(*runs[0].poses.supports.last().unwrap(), Support::Lying);
+    assert!((last.torso() - Point3::from(pair.goal)).norm() < 0.05);
+}
