@@ -11,6 +11,9 @@ import numpy as np
 
 from envfield import rooms
 
+# A generated room with a bed in it (generated rooms 0-9 are furnished by seed).
+BED_ROOM = 6
+
 
 class Rooms(unittest.TestCase):
     @classmethod
@@ -38,6 +41,22 @@ class Rooms(unittest.TestCase):
         self.assertTrue(sit.reached)
         # Seated at the end: the pelvis ends lower than it starts.
         self.assertLess(sit.poses[-1, 0, 2], sit.poses[0, 0, 2] - 0.2)
+
+    def test_a_lie_down_comes_back_as_arrays(self):
+        # A generated room with a bed: its region lies down on it.
+        scene = rooms.Scene.generated(seed=BED_ROOM)
+        region = scene.region(seed=BED_ROOM)
+        self.assertGreater(len(region.lie_downs), 0)
+        lie = region.lie_down(0)
+        self.assertEqual(lie.kind, "lie")
+        self.assertTrue(lie.reached)
+        self.assertGreater((lie.supported & lie.collision_free).mean(), 0.9)
+        # Lying at the end: the head as low as the pelvis, both well below a standing pelvis.
+        head = rooms.JOINTS.index("head")
+        self.assertLess(abs(lie.poses[-1, head, 2] - lie.poses[-1, 0, 2]), 0.15)
+        self.assertLess(lie.poses[-1, 0, 2], lie.poses[0, 0, 2] - 0.2)
+        with self.assertRaisesRegex(ValueError, "the region has"):
+            region.lie_down(10_000)
 
     def test_what_cannot_be_done_is_refused_by_name(self):
         with self.assertRaisesRegex(ValueError, "the region has"):
