@@ -99,11 +99,18 @@ fn from_file(apt: &Apartment, vae: &Cvae, seed: u64, dir: &Path) -> Result<serde
     let region = AccessibleRegion::from_drawn(&scene, &drawn, &RegionConfig::default())?;
     std::fs::remove_file(&file).ok();
     let r = region.times;
-    let total = import_ms + sample_ms + r.filter_ms + r.gaps_ms + r.sit_downs_ms + r.voxels_ms;
+    let total = import_ms
+        + sample_ms
+        + r.filter_ms
+        + r.gaps_ms
+        + r.sit_downs_ms
+        + r.lie_downs_ms
+        + r.voxels_ms;
     Ok(serde_json::json!({
         "import_ms": import_ms, "sample_ms": sample_ms, "filter_ms": r.filter_ms,
-        "gaps_ms": r.gaps_ms, "sit_downs_ms": r.sit_downs_ms, "voxels_ms": r.voxels_ms,
-        "total_ms": total, "voxels": region.grid.free_count(),
+        "gaps_ms": r.gaps_ms, "sit_downs_ms": r.sit_downs_ms, "lie_downs_ms": r.lie_downs_ms,
+        "voxels_ms": r.voxels_ms, "total_ms": total, "voxels": region.grid.free_count(),
+        "sit_downs": region.sit_downs.len(), "lie_downs": region.lie_downs.len(),
     }))
 }
 

@@ -227,6 +227,14 @@ fn lying_down_legs_first_keeps_the_shanks_out_of_the_bed() {
     })
     .unwrap_err();
     assert!(e.to_string().contains("lift"), "{e}");
+    for turn in [4.0, f32::NAN] {
+        let e = lie_down(&LieConfig {
+            turn,
+            ..LieConfig::default()
+        })
+        .unwrap_err();
+        assert!(e.to_string().contains("turn"), "{e}");
+    }
 }
 
 #[test]
