@@ -16,7 +16,8 @@
 //! ```
 //!
 //! Walking pairs join standing places of the region at least a metre apart; sit-down pairs
-//! go from in front of a seat to seated. The first pair's scene, region, paths, poses and
+//! go from in front of a seat to seated; lie-down pairs from beside a bed or sofa, through
+//! sitting on its edge, to lying on it. The first pair's scene, region, paths, poses and
 //! pictures (`top.png`, `room.png`) go to `--out`; the last line is JSON (`--json`).
 use anyhow::{bail, Context, Result};
 use clap::Parser;
@@ -56,7 +57,8 @@ struct Args {
     /// Evaluate this many rooms (seeds from --seed on).
     #[arg(long, default_value_t = 1)]
     rooms: u64,
-    /// Walking pairs per room (sit-down pairs: one per reachable seat).
+    /// Walking pairs per room (sit-down pairs: one per reachable seat; lie-down pairs: one
+    /// per reachable bed or sofa).
     #[arg(long, default_value_t = PairOptions::default().walks)]
     pairs: usize,
     /// The VAE's weights (default: the shipped gated VAE, `models/vae_gated.safetensors`,
@@ -85,7 +87,7 @@ struct Args {
     /// back to the region alone.
     #[arg(long, default_value_t = RunSettings::default().budget)]
     budget: f64,
-    /// The same for sit-down pairs.
+    /// The same for sit-down and lie-down pairs.
     #[arg(long, default_value_t = RunSettings::default().sit_budget)]
     sit_budget: f64,
     /// Torso samples drawn for the accessible region.
