@@ -1,6 +1,9 @@
 //! The lie-downs that carry the region from the edge of a bed or sofa onto its length: a
-//! sit-down the region found, then [`lie_down`] on the same surface, the torso tipping back
-//! and sliding onto it.
+//! sit-down onto the edge, then [`lie_down`] on the same surface, the legs coming up, the
+//! torso tipping back and sliding onto it. Each sit-down the region found is tried as the
+//! start of one ([`lie_down_from`]); lying places are tried as the end of one
+//! ([`lie_down_to`]): the kept samples of the parts apart from the floor's, and the level tops
+//! found on the scene's own columns ([`lying_places`]).
 
 use super::bridges::sit_down_at;
 use super::{RegionConfig, SitDown};
@@ -53,8 +56,10 @@ const LYING_LEGS: [Joint; 4] = [
 ];
 
 /// A lie-down the region found ([`AccessibleRegion::lie_downs`](super::AccessibleRegion::lie_downs)):
-/// one of its sit-downs, then [`lie_down`] from that seated pose on the same surface, the
-/// pelvis sliding `slide` metres back, every pose valid and plausible where it was found.
+/// a sit-down onto the edge of a bed or sofa, then [`lie_down`] from that seated pose on the
+/// same surface, the pelvis sliding `slide` metres back and the body turning by `turn`, every
+/// pose valid and plausible where it was found, the last on a surface that holds the whole
+/// body ([`LIE_ROOM`]).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct LieDown {
     /// The sit-down onto the edge it starts from (standing beside the bed or sofa).
