@@ -7,7 +7,7 @@
 //! first). A body is its bones as capsules ([`BONE_RADIUS`]); every pair of people is checked
 //! at every frame, a waiting person and a seated one included.
 
-use crate::harness::{run_pair, standing_places, Pair, RoomContext, RoomPlanner, RunSettings};
+use crate::harness::{run_pair, standing_places, Pair, RoomContext, RoomPlanner, Run, RunSettings};
 use crate::region::sit_down_to;
 use crate::{AccessibleRegion, RegionConfig, Result, RoomsError, SitDown};
 use envfield_affordance::{
@@ -168,29 +168,39 @@ pub fn dining_chairs(room: &Room) -> Vec<usize> {
         .unwrap_or_default()
 }
 
+/// Ours on the exact field walking from `start` to `goal` in `region` (its checks asking the
+/// scene), `gait` repeated along the path: its run, poses fitted.
+///
+/// # Errors
+/// As [`run_pair`].
+fn walk_exact(
+    scene: &Scene,
+    region: &AccessibleRegion,
+    start: Point3m,
+    goal: Point3m,
+    gait: &PoseSequence,
+) -> Result<Run> {
+    let pair = Pair::walking(start, goal, gait.clone());
+    run_pair(
+        &RoomContext::bare(scene, region),
+        &pair,
+        &[RoomPlanner::OursExact],
+        &RunSettings::default(),
+    )?
+    .pop()
+    .ok_or_else(|| RoomsError::InvalidInput("the planner ran on no pair".into()))
+}
+
 /// Whether `p` lies in the region or beside it (one of its 26 neighbour voxels accessible).
 fn beside(region: &AccessibleRegion, p: &Point3<f32>) -> bool {
-    let Some(c) = region.frame.cell_of(p) else {
+    let grid = &region.grid;
+    let Some(i) = region.frame.cell_of(p).and_then(|c| grid.index(c)) else {
         return false;
     };
-    let [nx, ny, nz] = region.frame.shape;
-    (-1i64..=1).any(|dx| {
-        (-1i64..=1).any(|dy| {
-            (-1i64..=1).any(|dz| {
-                let (x, y, z) = (c.x as i64 + dx, c.y as i64 + dy, c.z as i64 + dz);
-                let inside = x >= 0
-                    && y >= 0
-                    && z >= 0
-                    && (x as usize) < nx
-                    && (y as usize) < ny
-                    && (z as usize) < nz;
-                inside
-                    && region.grid.is_free(envfield_grid::Cell3::new(
-                        x as usize, y as usize, z as usize,
-                    ))
-            })
-        })
-    })
+    let free = |j: usize| grid.is_free(grid.cell(j));
+    let mut near = free(i);
+    grid.around(i, |j| near |= free(j));
+    near
 }
 
 /// Each chair's sit-down: of the region's sit-downs ending over the chair, the one ending
@@ -432,15 +442,7 @@ fn motion(
     sit: &SitDown,
     gait: &PoseSequence,
 ) -> Result<(PoseSequence, bool)> {
-    let pair = Pair::walking(start, sit.start, gait.clone());
-    let run = run_pair(
-        &RoomContext::bare(scene, region),
-        &pair,
-        &[RoomPlanner::OursExact],
-        &RunSettings::default(),
-    )?
-    .pop()
-    .ok_or_else(|| RoomsError::InvalidInput("the planner ran on no pair".into()))?;
+    let run = walk_exact(scene, region, start, sit.start, gait)?;
     let sit_down = sit.sequence()?;
     let mut frames = run.poses.frames;
     let mut supports = run.poses.supports;
@@ -505,15 +507,7 @@ fn walk_through(
         }
         let goal = *to[rng.below(to.len())];
         taken.extend([start, goal]);
-        let pair = Pair::walking(start, goal, gait.clone());
-        let run = run_pair(
-            &RoomContext::bare(scene, region),
-            &pair,
-            &[RoomPlanner::OursExact],
-            &RunSettings::default(),
-        )?
-        .pop()
-        .ok_or_else(|| RoomsError::InvalidInput("the planner ran on no pair".into()))?;
+        let run = walk_exact(scene, region, start, goal, gait)?;
         let reports = check_sequence(scene, &run.poses, &check)?;
         let valid = reports.iter().filter(|r| r.valid()).count();
         let mut passer = Guest {

@@ -261,26 +261,42 @@ impl SitDown {
             seat_height: self.seat_height,
             ..SitConfig::default()
         })?;
-        let end = seq
-            .frames
-            .last()
-            .map(|f| f.torso().coords)
-            .unwrap_or_default();
-        let to = Vector3::from(self.seated);
-        let frames = seq
-            .frames
-            .iter()
-            .map(|p| {
-                p.translated(&-end)
-                    .rotated_about_z(self.yaw, &Point3::origin())
-                    .translated(&to)
-            })
-            .collect();
-        Ok(PoseSequence::new(
-            seq.fps,
-            seq.activity,
-            frames,
-            seq.supports,
-        )?)
+        let end = seq.frames.len().saturating_sub(1);
+        placed(seq, end, self.yaw, self.seated)
     }
+}
+
+/// `seq` (made at the origin) turned by `yaw` about the vertical and moved so that frame
+/// `anchor`'s torso lies at `at`: a sit-down placed by where it ends seated, a lie-down by where
+/// it starts seated.
+///
+/// # Errors
+/// A non-finite place ([`PoseSequence::new`]).
+pub(super) fn placed(
+    seq: PoseSequence,
+    anchor: usize,
+    yaw: f32,
+    at: Point3m,
+) -> Result<PoseSequence> {
+    let from = seq
+        .frames
+        .get(anchor)
+        .map(|f| f.torso().coords)
+        .unwrap_or_default();
+    let to = Vector3::from(at);
+    let frames = seq
+        .frames
+        .iter()
+        .map(|p| {
+            p.translated(&-from)
+                .rotated_about_z(yaw, &Point3::origin())
+                .translated(&to)
+        })
+        .collect();
+    Ok(PoseSequence::new(
+        seq.fps,
+        seq.activity,
+        frames,
+        seq.supports,
+    )?)
 }

@@ -5,7 +5,7 @@
 //! ([`lie_down_to`]): the kept samples of the parts apart from the floor's, and the level tops
 //! found on the scene's own columns ([`lying_places`]).
 
-use super::bridges::sit_down_at;
+use super::bridges::{placed, sit_down_at};
 use super::{RegionConfig, SitDown};
 use crate::Result;
 use envfield_affordance::{
@@ -110,27 +110,7 @@ fn lying_part(sit: &SitDown, slide: f32, turn: f32) -> Result<PoseSequence> {
         lift: LIE_LIFT,
         ..LieConfig::default()
     })?;
-    let first = seq
-        .frames
-        .first()
-        .map(|f| f.torso().coords)
-        .unwrap_or_default();
-    let to = Vector3::from(sit.seated);
-    let frames = seq
-        .frames
-        .iter()
-        .map(|p| {
-            p.translated(&-first)
-                .rotated_about_z(sit.yaw, &Point3::origin())
-                .translated(&to)
-        })
-        .collect();
-    Ok(PoseSequence::new(
-        seq.fps,
-        seq.activity,
-        frames,
-        seq.supports,
-    )?)
+    placed(seq, 0, sit.yaw, sit.seated)
 }
 
 /// The lie-down that follows `sit`: the longest slide of [`LIE_SLIDES`] whose every pose is
@@ -155,35 +135,35 @@ pub(crate) fn lie_down_from(
         if !ends.holds(scene, sit.yaw + turn, lying, config)? {
             continue;
         }
-        if lies(scene, sit, slide, turn, config)? {
-            let seq = lying_part(sit, slide, turn)?;
-            let lying = seq.frames.last().expect("a lie-down has frames").torso();
+        if let Some(lying) = lies(scene, sit, slide, turn, config)? {
             return Ok(Some(LieDown {
                 sit: *sit,
                 slide,
                 turn,
-                lying: lying.into(),
+                lying,
             }));
         }
     }
     Ok(None)
 }
 
-/// Whether every pose of lying down from `sit`, sliding `slide` and turning `turn`, is valid and [`plausible`]
-/// (a frame still tipping back may rest its back on the surface, as a lying one does): lying
-/// first, so that on a chair or a stool, where nothing bears the head, the try ends at once.
+/// Where the torso ends lying, when every pose of lying down from `sit`, sliding `slide` and
+/// turning `turn`, is valid and [`plausible`] (a frame still tipping back may rest its back on
+/// the surface, as a lying one does) and the last lies on a surface that holds the whole body;
+/// `None` otherwise. Lying first, so that on a chair or a stool, where nothing bears the head,
+/// the try ends at once.
 fn lies(
     scene: &Scene,
     sit: &SitDown,
     slide: f32,
     turn: f32,
     config: &RegionConfig,
-) -> Result<bool> {
+) -> Result<Option<Point3m>> {
     let affordance = &config.filter.affordance;
     let seq = lying_part(sit, slide, turn)?;
     let n = seq.frames.len();
     if !whole_body_rests(scene, &seq.frames[n - 1], affordance.contact_tolerance)? {
-        return Ok(false);
+        return Ok(None);
     }
     for i in std::iter::once(n - 1).chain(1..n - 1) {
         let (pose, support) = (&seq.frames[i], seq.supports[i]);
@@ -191,10 +171,10 @@ fn lies(
         if !check_pose(scene, pose, support, affordance)?.valid()
             || !(rests(support)? || rests(Support::Lying)?)
         {
-            return Ok(false);
+            return Ok(None);
         }
     }
-    Ok(true)
+    Ok(Some(seq.frames[n - 1].torso().into()))
 }
 
 /// Whether a lying `pose` lies on a surface that holds the whole body: one within `tolerance`
@@ -271,16 +251,12 @@ pub(super) fn lie_down_to(
             let Some(sit) = sit_down_at(scene, seated.into(), sit_yaw, config, starts)? else {
                 continue;
             };
-            if lies(scene, &sit, slide, turn, config)? {
-                let lying = *lying_part(&sit, slide, turn)?
-                    .frames
-                    .last()
-                    .expect("a lie-down has frames");
+            if let Some(lying) = lies(scene, &sit, slide, turn, config)? {
                 return Ok(Some(LieDown {
                     sit,
                     slide,
                     turn,
-                    lying: lying.torso().into(),
+                    lying,
                 }));
             }
         }
