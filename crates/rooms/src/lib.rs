@@ -74,6 +74,7 @@ pub use nav::{PoseFilter, SceneTables};
 pub use region::{
     AccessibleRegion, BuildTimes, LeftOut, LieDown, RegionConfig, SitDown, LEFT_OUT_LEVEL_M,
     LEFT_OUT_NAMED_M2, LEFT_OUT_STOREY_M2, LIE_LIFT, LIE_ROOM, LIE_SLIDES, LIE_TURNS,
+    PASSAGE_CLEARANCE,
 };
 pub use sampling::{draw_torsos, sample_region};
 pub use surfaces::standing_torsos;

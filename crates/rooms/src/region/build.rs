@@ -1,14 +1,27 @@
 //! How a region is built from kept torso samples, step by step: the lattice, the samples'
-//! voxels, the gaps between them closed, the sit-downs laid in, the largest connected set.
+//! voxels, the gaps between them closed, the sit-downs laid in, the largest connected set
+//! (parted where no chest passes).
 
-use super::{AccessibleRegion, BuildTimes, LeftOut, LieDown, SitDown};
+use super::{
+    AccessibleRegion, BuildTimes, LeftOut, LieDown, SitDown, LEFT_OUT_LEVEL_M, LEFT_OUT_NAMED_M2,
+};
 use crate::{Result, RoomsError};
 use envfield_affordance::{Pose, PoseSequence};
 use envfield_grid::Point3m;
-use envfield_grid::{Cell3, Grid3};
-use envfield_scene::nalgebra::Point3;
+use envfield_grid::{Cell3, Components, Grid3};
+use envfield_scene::nalgebra::{Point3, Vector3};
 use envfield_scene::{Scene, VoxelFrame};
 use std::time::Instant;
+
+/// A person passes where their chest has this much room around it, metres: half a slim
+/// adult's chest depth (0.2-0.3 m for adults). The region parts where its voxels have less
+/// (see [`part_at_passages`]); on its 0.1 m voxels a passage narrower than 0.21 m always
+/// parts it and one of 0.31 m or more never does.
+pub const PASSAGE_CLEARANCE: f32 = 0.105;
+
+/// Where a torso voxel's room is measured: this far above its centre (metres), at a standing
+/// body's chest; above a seated or lying torso it is open air.
+const CHEST_ABOVE: f32 = 0.3;
 
 /// The six face neighbours of a voxel.
 const FACES: [(isize, isize, isize); 6] = [
@@ -119,7 +132,7 @@ pub(super) fn build(
     times.sit_downs_ms = ms(start) - lie_downs_ms;
     times.lie_downs_ms = lie_downs_ms;
     let start = Instant::now();
-    let (grid, components, left_out) = largest_set(&voxels)?;
+    let (grid, components, left_out) = largest_set(&voxels, scene)?;
     let mut region = AccessibleRegion::new(frame, grid, kept, components)?;
     region.left_out = left_out;
     region.sit_downs = sit_downs
@@ -202,13 +215,19 @@ fn lay_torsos(voxels: &mut Voxels<'_>, seq: &PoseSequence, voxel: f32) {
     }
 }
 
-/// The largest 26-connected set of the voxels that are on, how many sets there were, and the
-/// sets left out, largest first.
-fn largest_set(voxels: &Voxels<'_>) -> Result<(Grid3, usize, Vec<LeftOut>)> {
+/// The largest 26-connected set of the voxels that are on, parted where a person does not
+/// pass ([`part_at_passages`]), how many sets there were, and the sets left out, largest first.
+fn largest_set(voxels: &Voxels<'_>, scene: &Scene) -> Result<(Grid3, usize, Vec<LeftOut>)> {
     let all = voxels.grid()?;
     let components = all.free_components();
     let largest = components.largest().unwrap_or(0);
-    let obstacles = components.labels.iter().map(|&l| l != largest).collect();
+    let mut labels = components.labels;
+    let parts = if components.sizes.is_empty() {
+        0
+    } else {
+        part_at_passages(voxels, &all, scene, &mut labels, largest)?
+    };
+    let obstacles = labels.iter().map(|&l| l != largest).collect();
     let grid = Grid3::from_obstacles(voxels.frame.shape, obstacles)?;
     if grid.free_count() == 0 {
         return Err(RoomsError::InvalidInput(
@@ -217,9 +236,102 @@ fn largest_set(voxels: &Voxels<'_>) -> Result<(Grid3, usize, Vec<LeftOut>)> {
     }
     Ok((
         grid,
-        components.count(),
-        left_out(voxels, &components.labels, largest),
+        components.sizes.len() + parts,
+        left_out(voxels, &labels, largest),
     ))
+}
+
+/// Parts the set labelled `largest` where a person does not pass: where its voxels' chests
+/// ([`CHEST_ABOVE`] over the torso) have less than [`PASSAGE_CLEARANCE`] of room, a body
+/// turned sideways fits its joints through (a slot in a wall) but not its chest. The voxels
+/// with room are grouped (26-connected); when two groups or more on the set's floor level
+/// (its lowest voxel, within [`LEFT_OUT_LEVEL_M`]) each cover [`LEFT_OUT_NAMED_M2`] of floor,
+/// every voxel of the set goes to the group nearest it (in voxel steps) and the set keeps the
+/// group with the most; the others get new labels, after every label in use. Seats, beds and
+/// corners with little room stay with the floor beside them: only floors apart count.
+/// Returns how many sets were parted off.
+fn part_at_passages(
+    voxels: &Voxels<'_>,
+    all: &Grid3,
+    scene: &Scene,
+    labels: &mut [usize],
+    largest: usize,
+) -> Result<usize> {
+    let members: Vec<usize> = (0..labels.len())
+        .filter(|&i| labels[i] == largest)
+        .collect();
+    let frame = voxels.frame;
+    let chests: Vec<Point3<f32>> = members
+        .iter()
+        .map(|&i| frame.center(voxels.cell(i)) + Vector3::new(0.0, 0.0, CHEST_ABOVE))
+        .collect();
+    let clear = scene.signed_distances(&chests)?;
+    let mut roomy = vec![false; labels.len()];
+    for (&i, &d) in members.iter().zip(&clear) {
+        roomy[i] = d >= PASSAGE_CLEARANCE;
+    }
+    let groups = Components::label(&roomy, |i, visit| all.around(i, visit));
+    // Each group's lowest voxel and its columns, to keep the floors of the set's level.
+    let lowest = members.iter().map(|&i| voxels.cell(i).z).min().unwrap_or(0);
+    let level = (LEFT_OUT_LEVEL_M / frame.voxel).round() as usize;
+    let mut low = vec![usize::MAX; groups.count()];
+    let mut columns = vec![std::collections::HashSet::new(); groups.count()];
+    for &i in &members {
+        let g = groups.labels[i];
+        if g != usize::MAX {
+            let c = voxels.cell(i);
+            low[g] = low[g].min(c.z);
+            columns[g].insert((c.x, c.y));
+        }
+    }
+    let cell_m2 = frame.voxel * frame.voxel;
+    let floors: Vec<usize> = (0..groups.count())
+        .filter(|&g| {
+            low[g] <= lowest + level && columns[g].len() as f32 * cell_m2 >= LEFT_OUT_NAMED_M2
+        })
+        .collect();
+    if floors.len() < 2 {
+        return Ok(0);
+    }
+    // Every voxel of the set to the floor nearest it, breadth first from all floors at once.
+    let mut owner = vec![usize::MAX; labels.len()];
+    let mut queue = std::collections::VecDeque::new();
+    for (k, &g) in floors.iter().enumerate() {
+        for &i in &members {
+            if groups.labels[i] == g {
+                owner[i] = k;
+                queue.push_back(i);
+            }
+        }
+    }
+    while let Some(i) = queue.pop_front() {
+        let k = owner[i];
+        all.around(i, |j| {
+            if labels[j] == largest && owner[j] == usize::MAX {
+                owner[j] = k;
+                queue.push_back(j);
+            }
+        });
+    }
+    let mut sizes = vec![0usize; floors.len()];
+    for &i in &members {
+        if owner[i] != usize::MAX {
+            sizes[owner[i]] += 1;
+        }
+    }
+    let kept = (0..floors.len()).max_by_key(|&k| sizes[k]).unwrap_or(0);
+    let next = labels
+        .iter()
+        .filter(|&&l| l != usize::MAX)
+        .max()
+        .map_or(0, |&l| l + 1);
+    for &i in &members {
+        let k = owner[i];
+        if k != usize::MAX && k != kept {
+            labels[i] = next + if k < kept { k } else { k - 1 };
+        }
+    }
+    Ok(floors.len() - 1)
 }
 
 /// What each set of voxels but the `largest` covers: its voxels, its columns and its box.

@@ -7,7 +7,8 @@
 //! the filter too, so the region does not spill over a table's edge; the sit-downs that join
 //! a seat's voxels to the floor's ([`SitDown`], every pose valid and plausible); the
 //! lie-downs from those sit-downs onto the length of a bed or sofa ([`LieDown`], the same);
-//! the largest 26-connected set. [`crate::quality`] judges the result.
+//! the largest 26-connected set, parted where no chest passes ([`PASSAGE_CLEARANCE`]).
+//! [`crate::quality`] judges the result.
 
 mod bridges;
 mod build;
@@ -17,6 +18,7 @@ mod write;
 
 pub(crate) use bridges::sit_down_to;
 pub use bridges::SitDown;
+pub use build::PASSAGE_CLEARANCE;
 pub use config::RegionConfig;
 pub use lie::{LieDown, LIE_LIFT, LIE_ROOM, LIE_SLIDES, LIE_TURNS};
 
@@ -75,7 +77,8 @@ pub const LEFT_OUT_STOREY_M2: f32 = 6.0;
 pub const LEFT_OUT_LEVEL_M: f32 = 0.15;
 
 /// The accessible region of a scene: the voxels holding kept torso samples (and their six
-/// neighbours, closing the gaps between samples), reduced to its largest 26-connected set.
+/// neighbours, closing the gaps between samples), reduced to its largest 26-connected set
+/// (parted first where a chest has less than [`PASSAGE_CLEARANCE`] of room).
 #[derive(Clone, Debug)]
 pub struct AccessibleRegion {
     /// The voxel lattice, metres.
@@ -84,7 +87,7 @@ pub struct AccessibleRegion {
     pub grid: Grid3,
     /// The kept samples, metres.
     pub samples: Vec<Point3m>,
-    /// Connected sets before the largest was kept.
+    /// Connected sets before the largest was kept (those parted at a passage included).
     pub components: usize,
     /// The sets apart from the largest, left out of the region, largest first (empty for a
     /// region made from its parts).
