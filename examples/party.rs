@@ -6,6 +6,9 @@
 //! no body already placed). Every pose is checked against the scene (supported and
 //! collision-free) and every pair of people at every frame (bones as capsules).
 //!
+//! The table is laid first: its chairs, tucked under it, pulled out ([`lay_table`]; `--as-found`
+//! leaves them).
+//!
 //! `cargo run --release --example party -- --apartments 20 --seed 31000 --json` prints one
 //! JSON line per apartment and a summary: guests seated, body overlaps, valid poses, the
 //! seconds per party (and per region). `--gltf party.glb` / `--html party.html` write the
@@ -17,7 +20,7 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use clap::Parser;
 use envfield::affordance::Actor;
-use envfield::rooms::party::{dining_chairs, plan_party, PartyConfig};
+use envfield::rooms::party::{dining_chairs, lay_table, plan_party, PartyConfig};
 use envfield::rooms::sample_region;
 use envfield::scene::RoomConfig;
 use envfield::vae::Cvae;
@@ -49,6 +52,10 @@ struct Args {
     /// The VAE's weights (default: the shipped gated VAE).
     #[arg(long)]
     vae: Option<PathBuf>,
+    /// Leave the table's chairs where the apartment has them (tucked 5-15 cm under it), rather
+    /// than pulling them out before the party ([`lay_table`]).
+    #[arg(long)]
+    as_found: bool,
     /// Print JSON lines only.
     #[arg(long)]
     json: bool,
@@ -97,12 +104,18 @@ fn main() -> Result<()> {
                 args.people
             );
         }
-        let (home, rooms) = maker.room_and_rooms(seed)?;
+        let (found, rooms) = maker.room_and_rooms(seed)?;
         seed += 1;
-        if dining_chairs(&home).len() < args.people {
+        let chairs = dining_chairs(&found);
+        if chairs.len() < args.people {
             skipped.push(seed - 1);
             continue;
         }
+        let (home, pulled) = if args.as_found {
+            (found, vec![0.0; chairs.len()])
+        } else {
+            lay_table(&found, &chairs)?
+        };
         let (k, seed) = (run, seed - 1);
         run += 1;
         let t = Instant::now();
@@ -138,6 +151,7 @@ fn main() -> Result<()> {
         let line = serde_json::json!({
             "apartment": seed,
             "rooms": rooms.len(),
+            "chairs_pulled_m": pulled,
             "seats_reached": party.chairs,
             "at": party.at,
             "seated": sat,

@@ -168,6 +168,120 @@ pub fn dining_chairs(room: &Room) -> Vec<usize> {
         .unwrap_or_default()
 }
 
+/// What a pulled-out chair leaves between its footprint and its table's edge, metres: room to
+/// stand in front of the seat and sit down, as a person pulls a chair out before sitting.
+pub const PULL_ROOM: f32 = 0.35;
+
+/// How close a moved chair's surface may come to anything else (metres) in [`lay_table`].
+pub const PULL_CLEAR: f32 = 0.01;
+
+/// The room with its dining table laid for a party: each chair of `chairs` (indices in
+/// [`Room::furniture`], as [`dining_chairs`] gives them) is pulled straight back from the
+/// table it faces until [`PULL_ROOM`] lies between its footprint and the table's, or, where a
+/// wall or other furniture is in the way, as far back as it goes clear of them (in 5 cm
+/// steps, its surface [`PULL_CLEAR`] from everything else at each).
+/// A chair with that room already stays. Chairs are moved one after another, each clear of
+/// those moved before. Returns the laid room (scene and furniture list) and how far each
+/// chair moved (metres, in the order of `chairs`).
+///
+/// The generator tucks chairs 5-15 cm under their table, and no sit-down onto them is valid
+/// from any heading (a person's knees meet the table's edge): people pull the chair out first.
+/// The pulling itself is not animated: the party starts at a laid table.
+///
+/// # Errors
+/// [`RoomsError::InvalidInput`] for a chair index past the furniture or not a chair; errors of
+/// moving the scene's objects.
+pub fn lay_table(room: &Room, chairs: &[usize]) -> Result<(Room, Vec<f32>)> {
+    let mut laid = room.clone();
+    let mut moved = Vec::with_capacity(chairs.len());
+    for &i in chairs {
+        let chair = laid.furniture.get(i).cloned().ok_or_else(|| {
+            RoomsError::InvalidInput(format!(
+                "chair {i} to pull out: the room has {} pieces",
+                laid.furniture.len()
+            ))
+        })?;
+        if chair.kind != ObjectKind::Chair {
+            return Err(RoomsError::InvalidInput(format!(
+                "piece {i} to pull out is a {:?}, not a chair",
+                chair.kind
+            )));
+        }
+        // The way the chair faces (toward its table) and the gap to the table's near edge.
+        let front = Vector3::new(-chair.yaw.sin(), chair.yaw.cos(), 0.0);
+        let along = |x: f32, y: f32| x * front.x + y * front.y;
+        let edge = along(chair.center[0], chair.center[1]) + chair.size[1] / 2.0;
+        let gap = laid
+            .furniture
+            .iter()
+            .filter(|t| t.kind == ObjectKind::Table)
+            .filter_map(|t| {
+                let f = t.footprint();
+                let near = [(f[0], f[1]), (f[2], f[1]), (f[0], f[3]), (f[2], f[3])]
+                    .into_iter()
+                    .map(|(x, y)| along(x, y))
+                    .fold(f32::INFINITY, f32::min);
+                // Only a table across the chair's front counts.
+                let side = Vector3::new(-front.y, front.x, 0.0);
+                let across = |x: f32, y: f32| x * side.x + y * side.y;
+                let c = across(chair.center[0], chair.center[1]);
+                let (lo, hi) = [(f[0], f[1]), (f[2], f[1]), (f[0], f[3]), (f[2], f[3])]
+                    .into_iter()
+                    .map(|(x, y)| across(x, y))
+                    .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), v| {
+                        (a.min(v), b.max(v))
+                    });
+                (near > edge - chair.size[1] && (lo..=hi).contains(&c)).then_some(near - edge)
+            })
+            .fold(f32::INFINITY, f32::min);
+        let want = PULL_ROOM - gap;
+        if !want.is_finite() || want <= 0.0 {
+            moved.push(0.0);
+            continue;
+        }
+        let object = chair.object;
+        let rest = laid.scene.without(object).ok_or_else(|| {
+            RoomsError::InvalidInput(format!("chair {i}'s object {object} is not in the scene"))
+        })?;
+        // The chair's surface off the floor, moved back in 5 cm steps (the last one to
+        // `want`), stopping before the first that meets something: a step at a time, a
+        // chair cannot pass through a wall.
+        let surface: Vec<Point3<f32>> = laid.scene.objects()[object]
+            .parts()
+            .iter()
+            .flat_map(|p| p.to_mesh().vertices)
+            .filter(|v| v.z > 0.03)
+            .collect();
+        let mut pulled = 0.0;
+        for k in 1..=(want / 0.05).ceil() as usize {
+            let step = (k as f32 * 0.05).min(want);
+            let there: Vec<Point3<f32>> = surface.iter().map(|v| v - front * step).collect();
+            let clear = rest
+                .signed_distances(&there)?
+                .into_iter()
+                .all(|d| d >= PULL_CLEAR);
+            if !clear {
+                break;
+            }
+            pulled = step;
+        }
+        if pulled > 0.0 {
+            let by = envfield_scene::nalgebra::Isometry3::translation(
+                -front.x * pulled,
+                -front.y * pulled,
+                0.0,
+            );
+            laid.scene = laid.scene.with_moved(object, &by)?;
+            laid.furniture[i].center = [
+                chair.center[0] - front.x * pulled,
+                chair.center[1] - front.y * pulled,
+            ];
+        }
+        moved.push(pulled);
+    }
+    Ok((laid, moved))
+}
+
 /// Ours on the exact field walking from `start` to `goal` in `region` (its checks asking the
 /// scene), `gait` repeated along the path: its run, poses fitted.
 ///
@@ -803,6 +917,116 @@ pub fn plan_party(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A 4 x 4 m room: a floor, a table (1.2 x 0.8 m top at 0.75 m on a central block) and
+    /// two chairs (0.45 x 0.45 x 0.9 m blocks) tucked 0.1 m under its long sides, facing it;
+    /// the north chair with a wall `wall` metres behind its back (none when `None`).
+    fn tucked_room(wall: Option<f32>) -> Room {
+        use envfield_scene::nalgebra::Isometry3;
+        use envfield_scene::{Furniture, Primitive, SceneObject};
+        let mut scene = Scene::new();
+        let mut add = |name: &str, kind: ObjectKind, half: [f32; 3], at: [f32; 3]| {
+            let object = SceneObject::new(name, kind)
+                .with(
+                    Primitive::cuboid([2.0 * half[0], 2.0 * half[1], 2.0 * half[2]]),
+                    Isometry3::translation(at[0], at[1], at[2]),
+                )
+                .expect("box");
+            scene.add(object).expect("add")
+        };
+        add(
+            "floor",
+            ObjectKind::Floor,
+            [2.0, 2.0, 0.05],
+            [2.0, 2.0, -0.05],
+        );
+        let table = add(
+            "table",
+            ObjectKind::Table,
+            [0.6, 0.4, 0.375],
+            [2.0, 2.0, 0.375],
+        );
+        // The chairs' centres: 0.4 + 0.225 - 0.1 from the table's.
+        let off = 0.4 + 0.225 - 0.1;
+        let south = add(
+            "south",
+            ObjectKind::Chair,
+            [0.225, 0.225, 0.45],
+            [2.0, 2.0 - off, 0.45],
+        );
+        let north = add(
+            "north",
+            ObjectKind::Chair,
+            [0.225, 0.225, 0.45],
+            [2.0, 2.0 + off, 0.45],
+        );
+        if let Some(gap) = wall {
+            let y = 2.0 + off + 0.225 + gap + 0.05;
+            add("wall", ObjectKind::Wall, [2.0, 0.05, 1.25], [2.0, y, 1.25]);
+        }
+        let piece = |kind, object, center: [f32; 2], yaw: f32, size: [f32; 3]| Furniture {
+            kind,
+            object,
+            center,
+            yaw,
+            size,
+            seat_height: (kind == ObjectKind::Chair).then_some(0.45),
+            seat_forward: None,
+        };
+        Room {
+            scene,
+            size: [4.0, 4.0],
+            furniture: vec![
+                piece(ObjectKind::Table, table, [2.0, 2.0], 0.0, [1.2, 0.8, 0.75]),
+                // The south chair faces +y (yaw 0), the north one -y.
+                piece(
+                    ObjectKind::Chair,
+                    south,
+                    [2.0, 2.0 - off],
+                    0.0,
+                    [0.45, 0.45, 0.9],
+                ),
+                piece(
+                    ObjectKind::Chair,
+                    north,
+                    [2.0, 2.0 + off],
+                    std::f32::consts::PI,
+                    [0.45, 0.45, 0.9],
+                ),
+            ],
+        }
+    }
+
+    #[test]
+    fn a_laid_table_has_its_chairs_pulled_out_as_far_as_the_room_allows() {
+        let room = tucked_room(None);
+        let chairs = dining_chairs(&room);
+        assert_eq!(chairs, vec![1, 2]);
+        let (laid, moved) = lay_table(&room, &chairs).expect("laid");
+        // Tucked 0.1 m under: pulled PULL_ROOM + 0.1 back (to within the 5 cm steps' rounding).
+        for (k, &m) in moved.iter().enumerate() {
+            assert!((m - (PULL_ROOM + 0.1)).abs() < 1e-4, "chair {k}: {m}");
+        }
+        let south = &laid.furniture[1];
+        assert!((south.center[1] - (2.0 - 0.525 - PULL_ROOM - 0.1)).abs() < 1e-4);
+        // The scene moved with the list: the chair's old place is air, its new one solid.
+        let at = |y: f32| {
+            laid.scene
+                .signed_distance(&Point3::new(2.0, y, 0.45))
+                .unwrap()
+        };
+        assert!(at(2.0 - 0.525 - 0.2) > 0.0);
+        assert!(at(south.center[1]) < 0.0);
+        // A wall 0.2 m behind the north chair: it goes back 0.15 m (the 5 cm steps, clear of
+        // the wall by 1 cm), the south chair all the way; nothing else moves.
+        let (laid, moved) = lay_table(&tucked_room(Some(0.2)), &chairs).expect("laid");
+        assert!((moved[0] - (PULL_ROOM + 0.1)).abs() < 1e-4, "{moved:?}");
+        assert!(moved[1] > 0.1 && moved[1] <= 0.2 - PULL_CLEAR, "{moved:?}");
+        assert_eq!(laid.furniture[0], room.furniture[0]);
+        // Not a chair, or past the list: refused.
+        assert!(lay_table(&room, &[0]).is_err());
+        assert!(lay_table(&room, &[7]).is_err());
+    }
 
     #[test]
     fn segments_measure_their_least_distance() {

@@ -253,6 +253,23 @@ impl Part {
         &self.aabb
     }
 
+    /// The same part moved rigidly by `by` (in the world frame): a chair pulled out, a door
+    /// swung. A mesh keeps its inside (its occupancy moves with it).
+    ///
+    /// # Errors
+    /// [`SceneError::InvalidGeometry`] for a motion that is not finite.
+    pub fn moved(&self, by: &Isometry3<f32>) -> Result<Self> {
+        check_pose(by)?;
+        let pose = by * self.pose;
+        Ok(Self {
+            shape: self.shape.clone(),
+            pose,
+            aabb: self.shape.compute_aabb(&pose),
+            primitive: self.primitive,
+            occupancy: self.occupancy.clone(),
+        })
+    }
+
     /// The pose of the parry3d shape (for cylinders this includes the y-to-z quarter turn).
     pub fn pose(&self) -> &Isometry3<f32> {
         &self.pose
@@ -359,5 +376,17 @@ impl SceneObject {
     /// Its bounding box (`None` without parts).
     pub fn aabb(&self) -> Option<&Aabb> {
         self.aabb.as_ref()
+    }
+
+    /// The same object, every part moved rigidly by `by` (see [`Part::moved`]).
+    ///
+    /// # Errors
+    /// As [`Part::moved`].
+    pub fn moved(&self, by: &Isometry3<f32>) -> Result<Self> {
+        let mut out = SceneObject::new(self.name.clone(), self.kind);
+        for part in &self.parts {
+            out.push(part.moved(by)?);
+        }
+        Ok(out)
     }
 }

@@ -1,6 +1,6 @@
 //! The signed-distance scene: objects made of parts (primitives or triangle meshes) at poses.
 
-use nalgebra::{Point3, Vector3};
+use nalgebra::{Isometry3, Point3, Vector3};
 use parry3d::bounding_volume::{Aabb, BoundingVolume};
 use parry3d::query::{PointQuery, Ray, RayCast};
 use rayon::prelude::*;
@@ -84,6 +84,44 @@ impl Scene {
     /// Its objects, in the order they were added.
     pub fn objects(&self) -> &[SceneObject] {
         &self.objects
+    }
+
+    /// The same scene with object `index` moved rigidly by `by` (a chair pulled out from
+    /// under a table), every other object as it was, in the same order.
+    ///
+    /// # Errors
+    /// [`SceneError::InvalidInput`] for an index past the objects; as [`SceneObject::moved`].
+    pub fn with_moved(&self, index: usize, by: &Isometry3<f32>) -> Result<Scene> {
+        if index >= self.objects.len() {
+            return Err(SceneError::InvalidInput(format!(
+                "object {index} to move: the scene has {} objects",
+                self.objects.len()
+            )));
+        }
+        let mut out = Scene::new();
+        for (i, object) in self.objects.iter().enumerate() {
+            out.add(if i == index {
+                object.moved(by)?
+            } else {
+                object.clone()
+            })?;
+        }
+        Ok(out)
+    }
+
+    /// The same scene without object `index` (the others in order; indices past it shift
+    /// down by one). `None` when nothing would be left or the index is past the objects.
+    pub fn without(&self, index: usize) -> Option<Scene> {
+        if index >= self.objects.len() || self.objects.len() == 1 {
+            return None;
+        }
+        let mut out = Scene::new();
+        for (i, object) in self.objects.iter().enumerate() {
+            if i != index {
+                out.add(object.clone()).ok()?;
+            }
+        }
+        Some(out)
     }
 
     /// Its bounding box (`None` when empty).
