@@ -179,7 +179,8 @@ pub const PULL_CLEAR: f32 = 0.01;
 /// [`Room::furniture`], as [`dining_chairs`] gives them) is pulled straight back from the
 /// table it faces until [`PULL_ROOM`] lies between its footprint and the table's, or, where a
 /// wall or other furniture is in the way, as far back as it goes clear of them (in 5 cm
-/// steps, its surface [`PULL_CLEAR`] from everything else at each).
+/// steps, its surface [`PULL_CLEAR`] from everything but its table at each, or no nearer
+/// than it was where it already touched; it slides away from the table).
 /// A chair with that room already stays. Chairs are moved one after another, each clear of
 /// those moved before. Returns the laid room (scene and furniture list) and how far each
 /// chair moved (metres, in the order of `chairs`).
@@ -231,18 +232,25 @@ pub fn lay_table(room: &Room, chairs: &[usize]) -> Result<(Room, Vec<f32>)> {
                     .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), v| {
                         (a.min(v), b.max(v))
                     });
-                (near > edge - chair.size[1] && (lo..=hi).contains(&c)).then_some(near - edge)
+                (near > edge - chair.size[1] && (lo..=hi).contains(&c))
+                    .then_some((near - edge, t.object))
             })
-            .fold(f32::INFINITY, f32::min);
-        let want = PULL_ROOM - gap;
-        if !want.is_finite() || want <= 0.0 {
+            .min_by(|a, b| a.0.total_cmp(&b.0));
+        let Some((gap, table)) = gap.filter(|g| g.0 < PULL_ROOM) else {
             moved.push(0.0);
             continue;
-        }
+        };
+        let want = PULL_ROOM - gap;
         let object = chair.object;
-        let rest = laid.scene.without(object).ok_or_else(|| {
-            RoomsError::InvalidInput(format!("chair {i}'s object {object} is not in the scene"))
-        })?;
+        // Everything but the chair and its table: a tucked chair may start inside its table's
+        // model (the generator overlaps footprints, not shapes) and slides out of it.
+        let missing =
+            || RoomsError::InvalidInput(format!("chair {i} or its table is not in the scene"));
+        let rest = laid
+            .scene
+            .without(object)
+            .and_then(|s| s.without(if table > object { table - 1 } else { table }))
+            .ok_or_else(missing)?;
         // The chair's surface off the floor, moved back in 5 cm steps (the last one to
         // `want`), stopping before the first that meets something: a step at a time, a
         // chair cannot pass through a wall.
@@ -252,6 +260,9 @@ pub fn lay_table(room: &Room, chairs: &[usize]) -> Result<(Room, Vec<f32>)> {
             .flat_map(|p| p.to_mesh().vertices)
             .filter(|v| v.z > 0.03)
             .collect();
+        // A contact the chair already has (its back against a wall it slides along) may
+        // stay, not grow.
+        let before = rest.signed_distances(&surface)?;
         let mut pulled = 0.0;
         for k in 1..=(want / 0.05).ceil() as usize {
             let step = (k as f32 * 0.05).min(want);
@@ -259,7 +270,8 @@ pub fn lay_table(room: &Room, chairs: &[usize]) -> Result<(Room, Vec<f32>)> {
             let clear = rest
                 .signed_distances(&there)?
                 .into_iter()
-                .all(|d| d >= PULL_CLEAR);
+                .zip(&before)
+                .all(|(d, &b)| d >= PULL_CLEAR.min(b - 1e-4));
             if !clear {
                 break;
             }
