@@ -208,82 +208,20 @@ pub fn lay_table(room: &Room, chairs: &[usize]) -> Result<(Room, Vec<f32>)> {
                 chair.kind
             )));
         }
-        // The way the chair faces (toward its table) and the gap to the table's near edge.
         let front = Vector3::new(-chair.yaw.sin(), chair.yaw.cos(), 0.0);
-        let along = |x: f32, y: f32| x * front.x + y * front.y;
-        let edge = along(chair.center[0], chair.center[1]) + chair.size[1] / 2.0;
-        let gap = laid
-            .furniture
-            .iter()
-            .filter(|t| t.kind == ObjectKind::Table)
-            .filter_map(|t| {
-                let f = t.footprint();
-                let near = [(f[0], f[1]), (f[2], f[1]), (f[0], f[3]), (f[2], f[3])]
-                    .into_iter()
-                    .map(|(x, y)| along(x, y))
-                    .fold(f32::INFINITY, f32::min);
-                // Only a table across the chair's front counts.
-                let side = Vector3::new(-front.y, front.x, 0.0);
-                let across = |x: f32, y: f32| x * side.x + y * side.y;
-                let c = across(chair.center[0], chair.center[1]);
-                let (lo, hi) = [(f[0], f[1]), (f[2], f[1]), (f[0], f[3]), (f[2], f[3])]
-                    .into_iter()
-                    .map(|(x, y)| across(x, y))
-                    .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), v| {
-                        (a.min(v), b.max(v))
-                    });
-                (near > edge - chair.size[1] && (lo..=hi).contains(&c))
-                    .then_some((near - edge, t.object))
-            })
-            .min_by(|a, b| a.0.total_cmp(&b.0));
-        let Some((gap, table)) = gap.filter(|g| g.0 < PULL_ROOM) else {
+        let Some((gap, table)) = table_ahead(&laid, &chair).filter(|g| g.0 < PULL_ROOM) else {
             moved.push(0.0);
             continue;
         };
-        let want = PULL_ROOM - gap;
-        let object = chair.object;
-        // Everything but the chair and its table: a tucked chair may start inside its table's
-        // model (the generator overlaps footprints, not shapes) and slides out of it.
-        let missing =
-            || RoomsError::InvalidInput(format!("chair {i} or its table is not in the scene"));
-        let rest = laid
-            .scene
-            .without(object)
-            .and_then(|s| s.without(if table > object { table - 1 } else { table }))
-            .ok_or_else(missing)?;
-        // The chair's surface off the floor, moved back in 5 cm steps (the last one to
-        // `want`), stopping before the first that meets something: a step at a time, a
-        // chair cannot pass through a wall.
-        let surface: Vec<Point3<f32>> = laid.scene.objects()[object]
-            .parts()
-            .iter()
-            .flat_map(|p| p.to_mesh().vertices)
-            .filter(|v| v.z > 0.03)
-            .collect();
-        // A contact the chair already has (its back against a wall it slides along) may
-        // stay, not grow.
-        let before = rest.signed_distances(&surface)?;
-        let mut pulled = 0.0;
-        for k in 1..=(want / 0.05).ceil() as usize {
-            let step = (k as f32 * 0.05).min(want);
-            let there: Vec<Point3<f32>> = surface.iter().map(|v| v - front * step).collect();
-            let clear = rest
-                .signed_distances(&there)?
-                .into_iter()
-                .zip(&before)
-                .all(|(d, &b)| d >= PULL_CLEAR.min(b - 1e-4));
-            if !clear {
-                break;
-            }
-            pulled = step;
-        }
+        let pulled = pull_back(&laid.scene, chair.object, table, -front, PULL_ROOM - gap)
+            .map_err(|e| RoomsError::InvalidInput(format!("chair {i}: {e}")))?;
         if pulled > 0.0 {
             let by = envfield_scene::nalgebra::Isometry3::translation(
                 -front.x * pulled,
                 -front.y * pulled,
                 0.0,
             );
-            laid.scene = laid.scene.with_moved(object, &by)?;
+            laid.scene = laid.scene.with_moved(chair.object, &by)?;
             laid.furniture[i].center = [
                 chair.center[0] - front.x * pulled,
                 chair.center[1] - front.y * pulled,
@@ -292,6 +230,81 @@ pub fn lay_table(room: &Room, chairs: &[usize]) -> Result<(Room, Vec<f32>)> {
         moved.push(pulled);
     }
     Ok((laid, moved))
+}
+
+/// The table across `chair`'s front (the chair faces `(-sin yaw, cos yaw)`; the table's
+/// footprint spans the chair's centre sideways and lies ahead of its back): the gap from the
+/// chair's footprint to the table's near edge (negative when tucked under it) and the table's
+/// scene object. The nearest such table, `None` without one.
+fn table_ahead(room: &Room, chair: &envfield_scene::Furniture) -> Option<(f32, usize)> {
+    let (s, c) = chair.yaw.sin_cos();
+    // Along the way the chair faces, and across it.
+    let along = |(x, y): (f32, f32)| -s * x + c * y;
+    let across = |(x, y): (f32, f32)| c * x + s * y;
+    let centre = (chair.center[0], chair.center[1]);
+    let edge = along(centre) + chair.size[1] / 2.0;
+    room.furniture
+        .iter()
+        .filter(|t| t.kind == ObjectKind::Table)
+        .filter_map(|t| {
+            let f = t.footprint();
+            let corners = [(f[0], f[1]), (f[2], f[1]), (f[0], f[3]), (f[2], f[3])];
+            let near = corners.map(along).into_iter().fold(f32::INFINITY, f32::min);
+            let sideways = corners.map(across);
+            let lo = sideways.into_iter().fold(f32::INFINITY, f32::min);
+            let hi = sideways.into_iter().fold(f32::NEG_INFINITY, f32::max);
+            (near > edge - chair.size[1] && (lo..=hi).contains(&across(centre)))
+                .then_some((near - edge, t.object))
+        })
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+}
+
+/// How far (metres, up to `want`) scene object `object` slides along the unit `way` in 5 cm
+/// steps (the last one to `want`), stopping before the first step that brings its surface
+/// (off the floor) within [`PULL_CLEAR`] of anything but itself and object `table`; a contact
+/// it already has may stay, not grow. A step at a time, it cannot pass through a wall; out of
+/// `table`, which a tucked chair may start inside (the generator overlaps footprints, not
+/// shapes), it slides.
+///
+/// # Errors
+/// `object` or `table` not in `scene`; errors of the scene's queries.
+fn pull_back(
+    scene: &Scene,
+    object: usize,
+    table: usize,
+    way: Vector3<f32>,
+    want: f32,
+) -> Result<f32> {
+    let rest = scene
+        .without(object)
+        .and_then(|s| s.without(if table > object { table - 1 } else { table }))
+        .ok_or_else(|| {
+            RoomsError::InvalidInput(format!(
+                "objects {object} and {table} are not both in the scene"
+            ))
+        })?;
+    let surface: Vec<Point3<f32>> = scene.objects()[object]
+        .parts()
+        .iter()
+        .flat_map(|p| p.to_mesh().vertices)
+        .filter(|v| v.z > 0.03)
+        .collect();
+    let before = rest.signed_distances(&surface)?;
+    let mut pulled = 0.0;
+    for k in 1..=(want / 0.05).ceil() as usize {
+        let step = (k as f32 * 0.05).min(want);
+        let there: Vec<Point3<f32>> = surface.iter().map(|v| v + way * step).collect();
+        let clear = rest
+            .signed_distances(&there)?
+            .into_iter()
+            .zip(&before)
+            .all(|(d, &b)| d >= PULL_CLEAR.min(b - 1e-4));
+        if !clear {
+            break;
+        }
+        pulled = step;
+    }
+    Ok(pulled)
 }
 
 /// Ours on the exact field walking from `start` to `goal` in `region` (its checks asking the
