@@ -16,7 +16,7 @@ use std::time::Instant;
 /// A person passes where their chest has this much room around it, metres: half a slim
 /// adult's chest depth (0.2-0.3 m for adults). The region parts where its voxels have less
 /// (see [`part_at_passages`]); on its 0.1 m voxels a passage narrower than 0.21 m always
-/// parts it and one of 0.31 m or more never does.
+/// parts it and one of 0.31 m or more never does. Lattices coarser than 0.21 m are not parted.
 pub const PASSAGE_CLEARANCE: f32 = 0.105;
 
 /// Where a torso voxel's room is measured: this far above its centre (metres), at a standing
@@ -248,7 +248,8 @@ fn largest_set(voxels: &Voxels<'_>, scene: &Scene) -> Result<(Grid3, usize, Vec<
 /// (its lowest voxel, within [`LEFT_OUT_LEVEL_M`]) each cover [`LEFT_OUT_NAMED_M2`] of floor,
 /// every voxel of the set goes to the group nearest it (in voxel steps) and the set keeps the
 /// group with the most; the others get new labels, after every label in use. Seats, beds and
-/// corners with little room stay with the floor beside them: only floors apart count.
+/// corners with little room stay with the floor beside them: only floors apart count. On a
+/// lattice coarser than twice the clearance (a level's 0.25 m voxels) nothing is parted.
 /// Returns how many sets were parted off.
 fn part_at_passages(
     voxels: &Voxels<'_>,
@@ -257,6 +258,10 @@ fn part_at_passages(
     labels: &mut [usize],
     largest: usize,
 ) -> Result<usize> {
+    if voxels.frame.voxel > 2.0 * PASSAGE_CLEARANCE {
+        // Too coarse to tell a slot from a doorway (a level's 0.25 m voxels).
+        return Ok(0);
+    }
     let members: Vec<usize> = (0..labels.len())
         .filter(|&i| labels[i] == largest)
         .collect();
