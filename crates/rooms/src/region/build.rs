@@ -14,9 +14,10 @@ use envfield_scene::{Scene, VoxelFrame};
 use std::time::Instant;
 
 /// A person passes where their chest has this much room around it, metres: half a slim
-/// adult's chest depth (0.2-0.3 m for adults). The region parts where its voxels have less
-/// (see [`part_at_passages`]); on its 0.1 m voxels a passage narrower than 0.21 m always
-/// parts it and one of 0.31 m or more never does. Lattices coarser than 0.21 m are not parted.
+/// adult's chest depth (0.2-0.3 m for adults). The region parts where its voxels have less,
+/// when that leaves floors of 1 m2 or more apart; on its 0.1 m voxels a passage narrower than
+/// 0.21 m always parts it and one of 0.31 m or more never does. Lattices coarser than 0.21 m
+/// are not parted.
 pub const PASSAGE_CLEARANCE: f32 = 0.105;
 
 /// Where a torso voxel's room is measured: this far above its centre (metres), at a standing
